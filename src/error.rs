@@ -1,0 +1,33 @@
+//! The library's error type: every failure that user input can cause, each with a message that
+//! says what went wrong and where (a file path, a flag, a key), so the binary prints one line.
+
+use std::path::PathBuf;
+
+/// Everything that can go wrong with user input or output files.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    #[error("{path}: file not found")]
+    NotFound { path: PathBuf },
+    #[error("{path}: cannot read: {source}")]
+    Read {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{path}: malformed OBJ: {message}")]
+    Obj { path: PathBuf, message: String },
+    #[error("{path}: malformed MTL: {message}")]
+    Mtl { path: PathBuf, message: String },
+    #[error("{path}: malformed scene description: {message}")]
+    Toml { path: PathBuf, message: String },
+    #[error("{path}: {message}")]
+    Scene { path: PathBuf, message: String },
+    #[error("{path}: cannot write: {message}")]
+    Write { path: PathBuf, message: String },
+    #[error("{path}: cannot read image: {message}")]
+    ImageRead { path: PathBuf, message: String },
+    #[error("invalid setting: {0}")]
+    Settings(String),
+}
+
+/// The library's result type.
+pub type Result<T, E = Error> = std::result::Result<T, E>;

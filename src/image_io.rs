@@ -1,0 +1,240 @@
+//! Image files: EXR (linear RGB f32, with vrpt's metadata as string attributes) and PNG
+//! (tone-mapped 8-bit sRGB). Every write goes to a temporary file in the target folder which is
+//! then renamed over the target, so an interrupted or failed write never destroys an older image.
+//!
+//! Tone mapping for PNG: `v · 2^exposure`, clamped to [0, 1], then the sRGB transfer function.
+
+use crate::error::{Error, Result};
+use exr::prelude::{self as exr_prelude, AttributeValue, ReadChannels, ReadLayers, Text, WritableImage};
+use glam::Vec3;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// The formats vrpt writes, chosen by file extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    Exr,
+    Png,
+}
+
+impl Format {
+    /// The format for `path`'s extension, or an error naming the path.
+    pub fn from_path(path: &Path) -> Result<Format> {
+        match path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase)
+            .as_deref()
+        {
+            Some("exr") => Ok(Format::Exr),
+            Some("png") => Ok(Format::Png),
+            _ => Err(Error::Write {
+                path: path.to_path_buf(),
+                message: "unknown image format (use .exr or .png)".into(),
+            }),
+        }
+    }
+}
+
+/// An RGB image with metadata, as read back from an EXR.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RgbImage {
+    pub width: u32,
+    pub height: u32,
+    /// Row-major, top row first.
+    pub pixels: Vec<Vec3>,
+    /// vrpt's metadata (keys without the `vrpt.` prefix).
+    pub metadata: BTreeMap<String, String>,
+}
+
+/// The sRGB transfer function of a linear value in [0, 1].
+#[inline]
+pub fn linear_to_srgb(v: f32) -> f32 {
+    if v <= 0.003_130_8 {
+        12.92 * v
+    } else {
+        1.055 * v.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// Tone map a linear pixel to 8-bit sRGB.
+#[inline]
+pub fn tonemap(v: Vec3, exposure: f32) -> [u8; 3] {
+    let s = 2f32.powf(exposure);
+    let q = |c: f32| {
+        let c = if c.is_finite() { (c * s).clamp(0.0, 1.0) } else { 0.0 };
+        (linear_to_srgb(c) * 255.0 + 0.5) as u8
+    };
+    [q(v.x), q(v.y), q(v.z)]
+}
+
+/// A temporary path beside `path`, for write-then-rename.
+fn temp_path(path: &Path) -> PathBuf {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
+}
+
+/// Write with `write` to a temporary file, then rename it over `path`.
+fn write_atomically(
+    path: &Path,
+    write: impl FnOnce(&Path) -> std::result::Result<(), String>,
+) -> Result<()> {
+    let err = |message: String| Error::Write {
+        path: path.to_path_buf(),
+        message,
+    };
+    if path.is_dir() {
+        return Err(err("is a folder".into()));
+    }
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        if !dir.is_dir() {
+            return Err(err(format!("folder {} does not exist", dir.display())));
+        }
+    }
+    let tmp = temp_path(path);
+    if let Err(e) = write(&tmp) {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(err(e));
+    }
+    std::fs::rename(&tmp, path).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        err(e.to_string())
+    })
+}
+
+/// Write `pixels` (row-major, `width × height`) as a linear RGB f32 EXR with `metadata`
+/// (stored as string attributes named `vrpt.KEY`).
+pub fn write_exr(
+    path: &Path,
+    width: u32,
+    height: u32,
+    pixels: &[Vec3],
+    metadata: &BTreeMap<String, String>,
+) -> Result<()> {
+    assert_eq!(pixels.len(), width as usize * height as usize);
+    write_atomically(path, |tmp| {
+        let w = width as usize;
+        let channels = exr_prelude::SpecificChannels::rgb(|p: exr_prelude::Vec2<usize>| {
+            let v = pixels[p.y() * w + p.x()];
+            (v.x, v.y, v.z)
+        });
+        let mut image = exr_prelude::Image::from_channels((w, height as usize), channels);
+        for (k, v) in metadata {
+            image.attributes.other.insert(
+                Text::from(format!("vrpt.{k}").as_str()),
+                AttributeValue::Text(Text::from(v.as_str())),
+            );
+        }
+        image.write().to_file(tmp).map_err(|e| e.to_string())
+    })
+}
+
+/// Write `pixels` as a tone-mapped 8-bit sRGB PNG.
+pub fn write_png(
+    path: &Path,
+    width: u32,
+    height: u32,
+    pixels: &[Vec3],
+    exposure: f32,
+) -> Result<()> {
+    assert_eq!(pixels.len(), width as usize * height as usize);
+    let bytes: Vec<u8> = pixels.iter().flat_map(|&v| tonemap(v, exposure)).collect();
+    write_atomically(path, |tmp| {
+        image::save_buffer_with_format(
+            tmp,
+            &bytes,
+            width,
+            height,
+            image::ExtendedColorType::Rgb8,
+            image::ImageFormat::Png,
+        )
+        .map_err(|e| e.to_string())
+    })
+}
+
+/// Write `pixels` in the format of `path`'s extension (metadata goes into EXRs only).
+pub fn write_image(
+    path: &Path,
+    width: u32,
+    height: u32,
+    pixels: &[Vec3],
+    metadata: &BTreeMap<String, String>,
+    exposure: f32,
+) -> Result<()> {
+    match Format::from_path(path)? {
+        Format::Exr => write_exr(path, width, height, pixels, metadata),
+        Format::Png => write_png(path, width, height, pixels, exposure),
+    }
+}
+
+/// Read the first RGB layer of an EXR and vrpt's metadata.
+pub fn read_exr(path: &Path) -> Result<RgbImage> {
+    if !path.exists() {
+        return Err(Error::NotFound {
+            path: path.to_path_buf(),
+        });
+    }
+    type Pixels = (usize, Vec<Vec3>);
+    let image = exr_prelude::read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .rgb_channels(
+            |res: exr_prelude::Vec2<usize>, _: &exr_prelude::RgbChannels| -> Pixels { (res.width(), vec![Vec3::ZERO; res.width() * res.height()]) },
+            |px: &mut Pixels, p: exr_prelude::Vec2<usize>, (r, g, b): (f32, f32, f32)| {
+                px.1[p.y() * px.0 + p.x()] = Vec3::new(r, g, b);
+            },
+        )
+        .first_valid_layer()
+        .all_attributes()
+        .from_file(path)
+        .map_err(|e| Error::ImageRead {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        })?;
+    let size = image.layer_data.size;
+    let mut metadata = BTreeMap::new();
+    for (k, v) in &image.attributes.other {
+        if let (Some(key), AttributeValue::Text(t)) = (k.to_string().strip_prefix("vrpt."), v) {
+            metadata.insert(key.to_string(), t.to_string());
+        }
+    }
+    Ok(RgbImage {
+        width: size.width() as u32,
+        height: size.height() as u32,
+        pixels: image.layer_data.channel_data.pixels.1,
+        metadata,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn srgb_endpoints_and_tonemap() {
+        assert_eq!(linear_to_srgb(0.0), 0.0);
+        assert!((linear_to_srgb(1.0) - 1.0).abs() < 1e-6);
+        assert_eq!(tonemap(Vec3::new(0.0, 1.0, 4.0), 0.0), [0, 255, 255]);
+        assert_eq!(tonemap(Vec3::splat(0.25), 1.0), tonemap(Vec3::splat(0.5), 0.0));
+        assert_eq!(tonemap(Vec3::splat(f32::NAN), 0.0), [0, 0, 0]);
+    }
+
+    #[test]
+    fn exr_round_trip_with_metadata() {
+        let dir = std::env::temp_dir().join(format!("vrpt-exr-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("a.exr");
+        let px: Vec<Vec3> = (0..6).map(|i| Vec3::new(i as f32, 0.5, -1.0)).collect();
+        let mut meta = BTreeMap::new();
+        meta.insert("spp".to_string(), "64".to_string());
+        write_exr(&path, 3, 2, &px, &meta).unwrap();
+        let img = read_exr(&path).unwrap();
+        assert_eq!((img.width, img.height), (3, 2));
+        assert_eq!(img.pixels, px);
+        assert_eq!(img.metadata.get("spp").map(String::as_str), Some("64"));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

@@ -1,0 +1,63 @@
+//! Samplers: where the points `u ∈ [0,1)^d` that feed every random decision come from.
+//!
+//! A path sample consumes dimensions in a fixed order (pixel position 2D, then per bounce: lobe
+//! choice 1D, direction 2D, Russian roulette 1D), each `next_*` call advancing to the next
+//! dimension. Every draw is a pure function of (seed, pixel, sample index, dimension), so the
+//! image does not depend on the number of threads or on the order in which tiles are rendered.
+//! Hot loops are generic over [`Sampler`]; the kind is chosen once, with a `match` on
+//! [`SamplerKind`].
+
+mod independent;
+mod stratified;
+
+pub use independent::IndependentSampler;
+pub use stratified::{grid_shape, permute_index, StratifiedSampler};
+
+use glam::{UVec2, Vec2};
+
+/// The largest f32 below 1: every sampler's values lie in `[0, ONE_MINUS_EPSILON]`.
+pub const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
+
+/// A source of sample points for one pixel sample at a time.
+pub trait Sampler: Clone + Send + Sync {
+    /// Start sample `index` of `pixel`: the dimension counter goes back to 0.
+    fn start_pixel_sample(&mut self, pixel: UVec2, index: u32);
+    /// The next 1D dimension of the current sample, in `[0, 1)`.
+    fn next_1d(&mut self) -> f32;
+    /// The next 2D dimension of the current sample, in `[0, 1)^2`.
+    fn next_2d(&mut self) -> Vec2;
+}
+
+/// Which sampler draws the points (the `--sampler` flag).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum)]
+pub enum SamplerKind {
+    /// Every number i.i.d. uniform.
+    Independent,
+    /// Jittered strata per dimension (N strata in 1D, an a×b grid in 2D with a·b = N), visited
+    /// in a hashed order that differs per dimension.
+    #[default]
+    Stratified,
+}
+
+impl SamplerKind {
+    /// The name used on the command line and in metadata.
+    pub fn name(self) -> &'static str {
+        match self {
+            SamplerKind::Independent => "independent",
+            SamplerKind::Stratified => "stratified",
+        }
+    }
+
+    /// Parse the name written by [`SamplerKind::name`].
+    pub fn from_name(s: &str) -> Option<Self> {
+        [SamplerKind::Independent, SamplerKind::Stratified]
+            .into_iter()
+            .find(|k| k.name() == s)
+    }
+}
+
+impl std::fmt::Display for SamplerKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}

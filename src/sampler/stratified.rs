@@ -1,0 +1,164 @@
+//! The stratified (jittered) sampler, with no stored sample tables.
+//!
+//! With N samples per pixel per pass, a 1D dimension is split into N strata `[k/N, (k+1)/N)` and
+//! a 2D dimension into an a×b grid (a·b = N, a the largest divisor of N not above √N, so a prime
+//! N gives a 1×N grid of slabs: square N stratify best). Sample `j` of the pass takes stratum
+//! `π_d(j)`, where `π_d` is Kensler's hashed permutation of `0..N` keyed by (seed, pixel, pass,
+//! dimension) — a different order per dimension, so dimensions are not correlated — and is
+//! jittered uniformly inside it. Each pass of N samples (sample indices `pN .. (p+1)N`) is a
+//! complete, independent stratified set, so runs of several passes stay unbiased and
+//! stratified pass by pass.
+
+use super::{Sampler, ONE_MINUS_EPSILON};
+use crate::math::{hash_words, mix64, u64_to_unit_f32};
+use glam::{UVec2, Vec2};
+
+/// The 2D grid `(a, b)` for N strata: `a·b = N`, `a ≤ b`, as square as N allows.
+pub fn grid_shape(n: u32) -> (u32, u32) {
+    let n = n.max(1);
+    let mut a = (n as f64).sqrt() as u32;
+    while a > 1 && n % a != 0 {
+        a -= 1;
+    }
+    let a = a.max(1);
+    (a, n / a)
+}
+
+/// Element `i` of a pseudo-random permutation of `0..n` chosen by `key` (Kensler 2013,
+/// "Correlated multi-jittered sampling": a keyed bijection on the next power of two, with cycle
+/// walking back into `0..n`).
+#[inline]
+pub fn permute_index(mut i: u32, n: u32, key: u32) -> u32 {
+    if n <= 1 {
+        return 0;
+    }
+    let p = key;
+    let mut w = n - 1;
+    w |= w >> 1;
+    w |= w >> 2;
+    w |= w >> 4;
+    w |= w >> 8;
+    w |= w >> 16;
+    loop {
+        i ^= p;
+        i = i.wrapping_mul(0xe170_893d);
+        i ^= p >> 16;
+        i ^= (i & w) >> 4;
+        i ^= p >> 8;
+        i = i.wrapping_mul(0x0929_eb3f);
+        i ^= p >> 23;
+        i ^= (i & w) >> 1;
+        i = i.wrapping_mul(1 | p >> 27);
+        i = i.wrapping_mul(0x6935_fa69);
+        i ^= (i & w) >> 11;
+        i = i.wrapping_mul(0x74dc_b303);
+        i ^= (i & w) >> 2;
+        i = i.wrapping_mul(0x9e50_1cc3);
+        i ^= (i & w) >> 2;
+        i = i.wrapping_mul(0xc860_a3df);
+        i &= w;
+        i ^= i >> 5;
+        if i < n {
+            break;
+        }
+    }
+    ((i as u64 + p as u64) % n as u64) as u32
+}
+
+/// Jittered strata per dimension, N samples per pixel per pass.
+#[derive(Clone, Debug)]
+pub struct StratifiedSampler {
+    seed: u64,
+    n: u32,
+    grid: (u32, u32),
+    /// Key of the current (pixel, pass).
+    key: u64,
+    /// Index of the current sample within its pass.
+    j: u32,
+    dim: u64,
+}
+
+impl StratifiedSampler {
+    /// A sampler for `samples_per_pass` samples per pixel per pass (normally the spp).
+    pub fn new(seed: u64, samples_per_pass: u32) -> Self {
+        let n = samples_per_pass.max(1);
+        StratifiedSampler {
+            seed,
+            n,
+            grid: grid_shape(n),
+            key: 0,
+            j: 0,
+            dim: 0,
+        }
+    }
+
+    /// (permutation key, jitter hash) of the next dimension.
+    #[inline]
+    fn next_keys(&mut self) -> (u32, u64) {
+        let dk = mix64(self.key ^ mix64(self.dim.wrapping_add(0xd6e8_feb8_6659_fd93)));
+        self.dim += 1;
+        let jitter = mix64(dk ^ (self.j as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15));
+        (dk as u32, jitter)
+    }
+}
+
+impl Sampler for StratifiedSampler {
+    #[inline]
+    fn start_pixel_sample(&mut self, pixel: UVec2, index: u32) {
+        let pass = index / self.n;
+        self.j = index % self.n;
+        self.key = hash_words(&[
+            self.seed ^ 0x5354_5241_5449_4649, // "STRATIFI": other streams than independent
+            ((pixel.x as u64) << 32) | pixel.y as u64,
+            pass as u64,
+        ]);
+        self.dim = 0;
+    }
+
+    #[inline]
+    fn next_1d(&mut self) -> f32 {
+        let (pk, h) = self.next_keys();
+        let s = permute_index(self.j, self.n, pk);
+        ((s as f32 + u64_to_unit_f32(h)) / self.n as f32).min(ONE_MINUS_EPSILON)
+    }
+
+    #[inline]
+    fn next_2d(&mut self) -> Vec2 {
+        let (pk, h) = self.next_keys();
+        let s = permute_index(self.j, self.n, pk);
+        let (a, b) = self.grid;
+        let (sx, sy) = (s % a, s / a);
+        Vec2::new(
+            ((sx as f32 + u64_to_unit_f32(h)) / a as f32).min(ONE_MINUS_EPSILON),
+            ((sy as f32 + u64_to_unit_f32(h << 24)) / b as f32).min(ONE_MINUS_EPSILON),
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn grid_shapes() {
+        assert_eq!(grid_shape(16), (4, 4));
+        assert_eq!(grid_shape(8), (2, 4));
+        assert_eq!(grid_shape(7), (1, 7));
+        assert_eq!(grid_shape(1), (1, 1));
+        assert_eq!(grid_shape(4096), (64, 64));
+    }
+
+    #[test]
+    fn permutation_is_a_bijection() {
+        for n in [1u32, 2, 3, 16, 17, 100, 256] {
+            for key in [0u32, 1, 0xdead_beef] {
+                let mut seen = vec![false; n as usize];
+                for i in 0..n {
+                    let p = permute_index(i, n, key) as usize;
+                    assert!(!seen[p], "n={n} key={key}: {p} twice");
+                    seen[p] = true;
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,275 @@
+//! The scene: triangles with shading data in BVH order, materials, emitters, camera,
+//! environment and render defaults, loaded from an `.obj`, a `scene.toml`, or a folder holding a
+//! `scene.toml`.
+//!
+//! Conventions: right-handed, y up. A triangle's geometric normal `ng = (v1−v0)×(v2−v0)` follows
+//! its counter-clockwise winding; emission is one-sided, on the side `ng` points to. Shading is
+//! two-sided: the integrator flips the shading frame to the side the ray arrives from.
+//! Without a description the camera frames the bounding box from +z, and a scene with no
+//! emitter gets a uniform white environment (radiance 1) so any OBJ renders visibly.
+
+pub mod description;
+pub mod obj;
+
+use crate::accel::{Accel, Hit};
+use crate::camera::CameraDesc;
+use crate::error::{Error, Result};
+use crate::material::Material;
+use description::{Description, RenderSection};
+use glam::Vec3;
+use std::path::{Path, PathBuf};
+
+/// One triangle of a mesh before the BVH is built.
+#[derive(Clone, Debug)]
+pub struct MeshTriangle {
+    pub p: [Vec3; 3],
+    /// Per-vertex shading normals, if the file has them.
+    pub normals: Option<[Vec3; 3]>,
+    pub material: u32,
+}
+
+/// A triangle soup.
+#[derive(Clone, Debug, Default)]
+pub struct Mesh {
+    pub triangles: Vec<MeshTriangle>,
+}
+
+/// Shading data of one triangle, stored in BVH order beside the accelerator's triangles.
+#[derive(Clone, Copy, Debug)]
+pub struct TriShading {
+    pub normals: [Vec3; 3],
+    /// Unit geometric normal by winding.
+    pub ng: Vec3,
+    pub material: u32,
+}
+
+/// An emissive triangle (for light sampling and statistics).
+#[derive(Clone, Copy, Debug)]
+pub struct Emitter {
+    /// BVH-order triangle index.
+    pub prim: u32,
+    pub area: f32,
+}
+
+/// The local geometry at a ray hit.
+#[derive(Clone, Copy, Debug)]
+pub struct SurfacePoint {
+    pub p: Vec3,
+    /// Unit geometric normal (winding).
+    pub ng: Vec3,
+    /// Unit interpolated shading normal, on the same side as `ng`.
+    pub ns: Vec3,
+    pub material: u32,
+}
+
+/// Everything the renderer needs.
+pub struct Scene {
+    /// The file the scene came from.
+    pub source: PathBuf,
+    pub accel: Accel,
+    pub shading: Vec<TriShading>,
+    pub materials: Vec<Material>,
+    pub emitters: Vec<Emitter>,
+    pub camera: CameraDesc,
+    /// Radiance of rays that escape.
+    pub environment: Vec3,
+    /// Defaults from `scene.toml` (flags override them).
+    pub defaults: RenderSection,
+    pub bounds: (Vec3, Vec3),
+    /// Origin offset along the geometric normal for spawned rays, scaled to the scene.
+    pub ray_epsilon: f32,
+    /// Things the user should hear about (missing materials, scaled materials, …).
+    pub warnings: Vec<String>,
+}
+
+/// Optional settings for [`Scene::build`].
+#[derive(Clone, Debug, Default)]
+pub struct SceneOptions {
+    pub camera: Option<CameraDesc>,
+    pub environment: Option<Vec3>,
+    pub defaults: RenderSection,
+}
+
+impl Scene {
+    /// Build the BVH and the shading arrays from a mesh and its materials.
+    pub fn build(
+        source: PathBuf,
+        mesh: Mesh,
+        materials: Vec<Material>,
+        options: SceneOptions,
+        mut warnings: Vec<String>,
+    ) -> Result<Scene> {
+        if mesh.triangles.is_empty() {
+            return Err(Error::Scene {
+                path: source,
+                message: "the scene has no (non-degenerate) faces".into(),
+            });
+        }
+        if let Some(t) = mesh
+            .triangles
+            .iter()
+            .find(|t| t.material as usize >= materials.len())
+        {
+            return Err(Error::Scene {
+                path: source,
+                message: format!("material index {} out of range", t.material),
+            });
+        }
+        let positions: Vec<[Vec3; 3]> = mesh.triangles.iter().map(|t| t.p).collect();
+        let accel = Accel::build(&positions);
+        let mut lo = Vec3::splat(f32::INFINITY);
+        let mut hi = Vec3::splat(f32::NEG_INFINITY);
+        for p in positions.iter().flatten() {
+            lo = lo.min(*p);
+            hi = hi.max(*p);
+        }
+        let shading: Vec<TriShading> = accel
+            .order
+            .iter()
+            .map(|&i| {
+                let t = &mesh.triangles[i as usize];
+                let ng = (t.p[1] - t.p[0]).cross(t.p[2] - t.p[0]).normalize_or_zero();
+                let normals = t.normals.map_or([ng; 3], |n| n.map(|v| v.normalize()));
+                TriShading {
+                    normals,
+                    ng,
+                    material: t.material,
+                }
+            })
+            .collect();
+        let emitters: Vec<Emitter> = shading
+            .iter()
+            .enumerate()
+            .filter(|(_, s)| materials[s.material as usize].is_emissive())
+            .map(|(i, _)| {
+                let [a, b, c] = accel.vertices(i as u32);
+                Emitter {
+                    prim: i as u32,
+                    area: 0.5 * (b - a).cross(c - a).length(),
+                }
+            })
+            .collect();
+        let environment = options.environment.unwrap_or_else(|| {
+            if emitters.is_empty() {
+                warnings.push("no emitters: lighting with a uniform white environment".into());
+                Vec3::ONE
+            } else {
+                Vec3::ZERO
+            }
+        });
+        let camera = options.camera.unwrap_or_else(|| frame_bounds(lo, hi));
+        let extent = lo.abs().max(hi.abs()).max_element().max((hi - lo).max_element());
+        Ok(Scene {
+            source,
+            accel,
+            shading,
+            materials,
+            emitters,
+            camera,
+            environment,
+            defaults: options.defaults,
+            bounds: (lo, hi),
+            ray_epsilon: 1e-5 * extent.max(1e-3),
+            warnings,
+        })
+    }
+
+    /// Number of triangles.
+    pub fn triangle_count(&self) -> usize {
+        self.accel.len()
+    }
+
+    /// The surface at a hit.
+    #[inline]
+    pub fn surface(&self, hit: &Hit) -> SurfacePoint {
+        let sh = &self.shading[hit.prim as usize];
+        let [a, b, c] = self.accel.vertices(hit.prim);
+        let b0 = 1.0 - hit.b1 - hit.b2;
+        let p = a * b0 + b * hit.b1 + c * hit.b2;
+        let n = sh.normals[0] * b0 + sh.normals[1] * hit.b1 + sh.normals[2] * hit.b2;
+        let mut ns = n.try_normalize().unwrap_or(sh.ng);
+        if ns.dot(sh.ng) < 0.0 {
+            ns = -ns;
+        }
+        SurfacePoint {
+            p,
+            ng: sh.ng,
+            ns,
+            material: sh.material,
+        }
+    }
+}
+
+/// A camera looking at the bounding box from +z, far enough back to see all of it at 40°.
+fn frame_bounds(lo: Vec3, hi: Vec3) -> CameraDesc {
+    let centre = 0.5 * (lo + hi);
+    let radius = (0.5 * (hi - lo).length()).max(1e-3);
+    let fov_deg = 40.0f32;
+    let dist = radius / (0.5 * fov_deg.to_radians()).sin();
+    CameraDesc {
+        eye: centre + Vec3::Z * dist,
+        target: centre,
+        up: Vec3::Y,
+        fov_deg,
+    }
+}
+
+/// Load a scene from an `.obj` (with a `scene.toml` beside it that names it, if any), a
+/// `scene.toml`, or a folder holding a `scene.toml`.
+pub fn load(path: &Path) -> Result<Scene> {
+    if !path.exists() {
+        return Err(Error::NotFound {
+            path: path.to_path_buf(),
+        });
+    }
+    let (obj_path, desc) = if path.is_dir() {
+        let toml = path.join("scene.toml");
+        if !toml.is_file() {
+            return Err(Error::Scene {
+                path: path.to_path_buf(),
+                message: "folder holds no scene.toml".into(),
+            });
+        }
+        let d = Description::load(&toml)?;
+        (path.join(&d.obj), Some(d))
+    } else {
+        match path.extension().and_then(|e| e.to_str()) {
+            Some(e) if e.eq_ignore_ascii_case("toml") => {
+                let d = Description::load(path)?;
+                (path.parent().unwrap_or(Path::new(".")).join(&d.obj), Some(d))
+            }
+            Some(e) if e.eq_ignore_ascii_case("obj") => {
+                let beside = path.with_file_name("scene.toml");
+                let d = if beside.is_file() {
+                    let d = Description::load(&beside)?;
+                    let names_us = Path::new(&d.obj).file_name() == path.file_name();
+                    names_us.then_some(d)
+                } else {
+                    None
+                };
+                (path.to_path_buf(), d)
+            }
+            _ => {
+                return Err(Error::Scene {
+                    path: path.to_path_buf(),
+                    message: "not a scene: expected an .obj, a scene.toml or a folder".into(),
+                })
+            }
+        }
+    };
+    let (mesh, materials, warnings) = obj::load_obj(&obj_path)?;
+    let options = match desc {
+        Some(d) => SceneOptions {
+            camera: d.camera.map(|c| CameraDesc {
+                eye: Vec3::from_array(c.eye),
+                target: Vec3::from_array(c.target),
+                up: Vec3::from_array(c.up),
+                fov_deg: c.fov,
+            }),
+            environment: d.environment.map(|e| Vec3::from_array(e.radiance)),
+            defaults: d.render.unwrap_or_default(),
+        },
+        None => SceneOptions::default(),
+    };
+    Scene::build(obj_path, mesh, materials, options, warnings)
+}

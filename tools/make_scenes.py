@@ -1,0 +1,549 @@
+#!/usr/bin/env python3
+"""Generate the vrpt test scenes under scenes/.
+
+Writes three scene folders, each holding NAME.obj, NAME.mtl and scene.toml:
+
+  scenes/cornell-box/    the classic Cornell box from the published Cornell
+                         measurements (mm), with a glossy tall box.
+  scenes/glossy-plates/  Veach's multiple-importance-sampling scene: four
+                         glossy plates (Phong Ns 10..10000) reflecting four
+                         emitters of equal power and increasing size.
+  scenes/checker-plane/  an emissive checkerboard plane seen at a slant
+                         (a pure 2D pixel-integration / antialiasing test).
+
+The files under scenes/ are committed output of this script; edit the script
+and rerun it rather than editing them by hand:
+
+    python3 tools/make_scenes.py
+
+Conventions: right-handed, y up.  Faces are triangles or quads given with
+1-based vertex indices only, wound counter-clockwise seen from the side
+their normal points to (n = (v1 - v0) x (v2 - v0)).  Emission is one-sided,
+so every face is built from a corner list plus a point (or direction) it
+must face, and the winding is flipped if needed and then asserted.
+Standard library only.
+"""
+
+import math
+import os
+import sys
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+SCENES = os.path.join(ROOT, "scenes")
+
+
+# ---------------------------------------------------------------- vectors
+def add(a, b):
+    return (a[0] + b[0], a[1] + b[1], a[2] + b[2])
+
+
+def sub(a, b):
+    return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
+
+
+def mul(a, s):
+    return (a[0] * s, a[1] * s, a[2] * s)
+
+
+def dot(a, b):
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+def cross(a, b):
+    return (a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0])
+
+
+def length(a):
+    return math.sqrt(dot(a, a))
+
+
+def norm(a):
+    n = length(a)
+    return (a[0] / n, a[1] / n, a[2] / n)
+
+
+def centroid(pts):
+    n = float(len(pts))
+    return (sum(p[0] for p in pts) / n,
+            sum(p[1] for p in pts) / n,
+            sum(p[2] for p in pts) / n)
+
+
+def fan_normals(pts):
+    """Winding normals of the fan triangles (v0, vi, vi+1) of a polygon."""
+    return [cross(sub(pts[i], pts[0]), sub(pts[i + 1], pts[0]))
+            for i in range(1, len(pts) - 1)]
+
+
+def reflect(d, n):
+    return sub(d, mul(n, 2.0 * dot(d, n)))
+
+
+def angle_deg(a, b):
+    c = dot(norm(a), norm(b))
+    return math.degrees(math.acos(max(-1.0, min(1.0, c))))
+
+
+# ---------------------------------------------------------------- formatting
+def fmt(v):
+    """At most 6 decimals, no trailing zeros, no negative zero."""
+    s = "%.6f" % v
+    s = s.rstrip("0").rstrip(".")
+    if s in ("-0", ""):
+        s = "0"
+    return s
+
+
+def tfloat(v):
+    """A TOML float (always has a decimal point)."""
+    s = fmt(v)
+    if "." not in s:
+        s += ".0"
+    return s
+
+
+def tvec(v):
+    return "[" + ", ".join(tfloat(x) for x in v) + "]"
+
+
+# ---------------------------------------------------------------- mesh
+class Mesh:
+    def __init__(self, name):
+        self.name = name
+        self.verts = []
+        self.vindex = {}
+        self.groups = []  # (group name, material, [faces as index lists])
+        self.materials = []  # (name, dict)
+
+    def material(self, name, kd, ks=(0.0, 0.0, 0.0), ns=None, ke=None):
+        for c in range(3):
+            assert kd[c] + ks[c] <= 1.0 + 1e-9, (name, kd, ks)
+        self.materials.append((name, dict(kd=kd, ks=ks, ns=ns, ke=ke)))
+
+    def group(self, gname, mat):
+        assert any(m[0] == mat for m in self.materials), mat
+        self.groups.append((gname, mat, []))
+
+    def vertex(self, p):
+        key = tuple(fmt(x) for x in p)
+        if key not in self.vindex:
+            self.verts.append(key)
+            self.vindex[key] = len(self.verts)  # 1-based
+        return self.vindex[key]
+
+    def face(self, pts, toward=None, direction=None, away_from=None):
+        """Add a polygon (3 or 4 corners).  Exactly one of:
+        toward    -- a point the normal must point toward,
+        direction -- a vector the normal must have a positive component along,
+        away_from -- a point the normal must point away from (convex solids).
+        The winding is reversed if needed, then every fan triangle's normal
+        is asserted to point the intended way."""
+        assert len(pts) in (3, 4)
+        c = centroid(pts)
+        if toward is not None:
+            want = sub(toward, c)
+        elif direction is not None:
+            want = direction
+        else:
+            want = sub(c, away_from)
+        if dot(fan_normals(pts)[0], want) < 0.0:
+            pts = [pts[0]] + list(reversed(pts[1:]))
+        for n in fan_normals(pts):
+            assert length(n) > 1e-12, ("degenerate face", pts)
+            assert dot(n, want) > 0.0, ("bad winding", pts, n, want)
+        self.groups[-1][2].append([self.vertex(p) for p in pts])
+
+    def triangle_count(self):
+        return sum(len(f) - 2 for g in self.groups for f in g[2])
+
+    def all_triangles(self, mat_filter=None):
+        out = []
+        for gname, mat, faces in self.groups:
+            if mat_filter and mat not in mat_filter:
+                continue
+            for f in faces:
+                p = [tuple(float(x) for x in self.verts[i - 1]) for i in f]
+                for i in range(1, len(p) - 1):
+                    out.append((p[0], p[i], p[i + 1]))
+        return out
+
+    def write(self, folder):
+        os.makedirs(folder, exist_ok=True)
+        obj = os.path.join(folder, self.name + ".obj")
+        mtl = os.path.join(folder, self.name + ".mtl")
+        lines = ["mtllib %s.mtl" % self.name,
+                 "# %s -- generated by tools/make_scenes.py, do not edit"
+                 % self.name]
+        for v in self.verts:
+            lines.append("v " + " ".join(v))
+        for gname, mat, faces in self.groups:
+            lines.append("o " + gname)
+            lines.append("g " + gname)
+            lines.append("usemtl " + mat)
+            for f in faces:
+                lines.append("f " + " ".join(str(i) for i in f))
+        with open(obj, "w") as fh:
+            fh.write("\n".join(lines) + "\n")
+        ml = ["# %s -- generated by tools/make_scenes.py, do not edit"
+              % self.name]
+        for name, m in self.materials:
+            ml.append("")
+            ml.append("newmtl " + name)
+            ml.append("Kd " + " ".join(fmt(x) for x in m["kd"]))
+            ml.append("Ks " + " ".join(fmt(x) for x in m["ks"]))
+            if m["ns"] is not None:
+                ml.append("Ns " + fmt(m["ns"]))
+            if m["ke"] is not None:
+                ml.append("Ke " + " ".join(fmt(x) for x in m["ke"]))
+        with open(mtl, "w") as fh:
+            fh.write("\n".join(ml) + "\n")
+        for p in (obj, mtl):
+            assert os.path.getsize(p) < 200 * 1024, p
+        return obj, mtl
+
+
+def write_toml(folder, name, eye, target, fov, radiance, width, height, spp,
+               max_depth, up=(0.0, 1.0, 0.0)):
+    text = "\n".join([
+        "# generated by tools/make_scenes.py, do not edit",
+        'obj = "%s.obj"' % name,
+        "",
+        "[camera]",
+        "eye = " + tvec(eye),
+        "target = " + tvec(target),
+        "up = " + tvec(up),
+        "fov = " + tfloat(fov),
+        "",
+        "[environment]",
+        "radiance = " + tvec(radiance),
+        "",
+        "[render]",
+        "width = %d" % width,
+        "height = %d" % height,
+        "spp = %d" % spp,
+        "max_depth = %d" % max_depth,
+        "",
+    ])
+    with open(os.path.join(folder, "scene.toml"), "w") as fh:
+        fh.write(text)
+
+
+class Camera:
+    """Pinhole camera with the renderer's conventions (right = fwd x up)."""
+
+    def __init__(self, eye, target, fov, width, height, up=(0.0, 1.0, 0.0)):
+        self.eye = eye
+        self.f = norm(sub(target, eye))
+        self.r = norm(cross(self.f, up))
+        self.u = cross(self.r, self.f)
+        self.t = math.tan(math.radians(fov) / 2.0)
+        self.aspect = width / float(height)
+        self.w, self.h = width, height
+
+    def project(self, p):
+        """Pixel (column, row) of a point, row 0 at the top."""
+        d = sub(p, self.eye)
+        z = dot(d, self.f)
+        x = dot(d, self.r) / z / (self.t * self.aspect)
+        y = dot(d, self.u) / z / self.t
+        return ((x + 1.0) * 0.5 * self.w, (1.0 - y) * 0.5 * self.h)
+
+
+def ray_triangle(o, d, tri):
+    """Möller-Trumbore; returns t or None."""
+    e1 = sub(tri[1], tri[0])
+    e2 = sub(tri[2], tri[0])
+    p = cross(d, e2)
+    det = dot(e1, p)
+    if abs(det) < 1e-12:
+        return None
+    inv = 1.0 / det
+    s = sub(o, tri[0])
+    u = dot(s, p) * inv
+    if u < 0.0 or u > 1.0:
+        return None
+    q = cross(s, e1)
+    v = dot(d, q) * inv
+    if v < 0.0 or u + v > 1.0:
+        return None
+    t = dot(e2, q) * inv
+    return t if t > 1e-6 else None
+
+
+# ================================================================ 1. Cornell
+def cornell_box():
+    name = "cornell-box"
+    m = Mesh(name)
+    white = (0.725, 0.71, 0.68)
+    m.material("white", white)
+    m.material("red", (0.63, 0.065, 0.05))
+    m.material("green", (0.14, 0.45, 0.091))
+    m.material("short_box", white)
+    m.material("tall_box", (0.4, 0.4, 0.4), ks=(0.5, 0.5, 0.5), ns=200.0)
+    m.material("light", (0.0, 0.0, 0.0), ke=(17.0, 12.0, 4.0))
+
+    # Published Cornell measurements (mm).
+    room_center = (278.0, 274.4, 279.6)
+    m.group("floor", "white")
+    m.face([(552.8, 0.0, 0.0), (0.0, 0.0, 0.0),
+            (0.0, 0.0, 559.2), (549.6, 0.0, 559.2)], direction=(0, 1, 0))
+    m.group("ceiling", "white")
+    m.face([(556.0, 548.8, 0.0), (556.0, 548.8, 559.2),
+            (0.0, 548.8, 559.2), (0.0, 548.8, 0.0)], direction=(0, -1, 0))
+    m.group("back_wall", "white")
+    m.face([(549.6, 0.0, 559.2), (0.0, 0.0, 559.2),
+            (0.0, 548.8, 559.2), (556.0, 548.8, 559.2)], direction=(0, 0, -1))
+    m.group("red_wall", "red")  # x ~ 550, faces -x (into the room)
+    m.face([(552.8, 0.0, 0.0), (549.6, 0.0, 559.2),
+            (556.0, 548.8, 559.2), (556.0, 548.8, 0.0)], direction=(-1, 0, 0))
+    m.group("green_wall", "green")  # x = 0, faces +x
+    m.face([(0.0, 0.0, 559.2), (0.0, 0.0, 0.0),
+            (0.0, 548.8, 0.0), (0.0, 548.8, 559.2)], direction=(1, 0, 0))
+    # all room faces must also face the room centre
+    for g in m.groups:
+        for f in g[2]:
+            p = [tuple(float(x) for x in m.verts[i - 1]) for i in f]
+            for n in fan_normals(p):
+                assert dot(n, sub(room_center, centroid(p))) > 0.0
+
+    def block(gname, mat, top):
+        bottom = [(p[0], 0.0, p[2]) for p in top]
+        center = centroid(top + bottom)
+        m.group(gname, mat)
+        m.face(list(top), away_from=center)
+        for i in range(4):
+            j = (i + 1) % 4
+            m.face([bottom[i], bottom[j], top[j], top[i]], away_from=center)
+
+    block("short_box", "short_box",
+          [(130.0, 165.0, 65.0), (82.0, 165.0, 225.0),
+           (240.0, 165.0, 272.0), (290.0, 165.0, 114.0)])
+    block("tall_box", "tall_box",
+          [(423.0, 330.0, 247.0), (265.0, 330.0, 296.0),
+           (314.0, 330.0, 456.0), (472.0, 330.0, 406.0)])
+
+    m.group("light", "light")  # just below the ceiling, emitting down
+    m.face([(343.0, 548.0, 227.0), (343.0, 548.0, 332.0),
+            (213.0, 548.0, 332.0), (213.0, 548.0, 227.0)],
+           direction=(0, -1, 0))
+
+    folder = os.path.join(SCENES, name)
+    m.write(folder)
+    eye, target, fov = (278.0, 273.0, -800.0), (278.0, 273.0, 0.0), 39.3
+    cam = Camera(eye, target, fov, 256, 256)
+    # the red wall (x ~ 550) must be on the left of the image
+    assert cam.project((552.8, 274.0, 300.0))[0] < 128.0
+    assert cam.project((0.0, 274.0, 300.0))[0] > 128.0
+    write_toml(folder, name, eye, target, fov, (0.0, 0.0, 0.0),
+               256, 256, 64, 8)
+    return m
+
+
+# ================================================================ 2. Veach
+def glossy_plates():
+    name = "glossy-plates"
+    m = Mesh(name)
+    eye, target, fov = (0.0, 2.0, 15.0), (0.0, -2.0, 2.5), 28.0
+    width, height = 256, 192
+    cam = Camera(eye, target, fov, width, height)
+
+    m.material("floor", (0.2, 0.2, 0.2))
+    # back (top of image) = roughest, front (bottom of image) = sharpest
+    exponents = [10, 100, 1000, 10000]
+    for e in exponents:
+        m.material("plate%d" % e, (0.05, 0.05, 0.05), ks=(0.9, 0.9, 0.9),
+                   ns=float(e))
+
+    # Emitters: icosahedra (circumradius r) in a row, equal power.
+    light_y, light_z = 0.0, 0.0
+    light_xs = [-3.75, -1.25, 1.25, 3.75]
+    radii = [0.03, 0.1, 0.3, 0.9]
+    power_k = 0.72  # Ke * r^2, constant over the four lights
+    for i, r in enumerate(radii):
+        ke = power_k / (r * r)
+        m.material("light%d" % i, (0.0, 0.0, 0.0), ke=(ke, ke, ke))
+
+    # Plates: 7.6 wide (x -3.8..3.8) so the outer lights' highlights land on
+    # them while the front plate still fits in the frame;
+    # 0.8 deep, stacked back (higher) to front (lower).
+    plate_w, plate_d = 7.6, 0.8
+    centers = [(0.0, -2.3, 0.0), (0.0, -2.7667, 1.3333),
+               (0.0, -3.2333, 2.6667), (0.0, -3.7, 4.0)]
+    aim = (0.0, light_y, light_z)  # middle of the light row
+    plates = []
+    print("glossy-plates: plate tilt check (mirror ray from the eye through "
+          "each plate centre)")
+    for c, e in zip(centers, exponents):
+        # Tilt: the plate normal is the half vector between the directions to
+        # the eye and to the light row, so the mirror direction hits it.
+        n = norm(add(norm(sub(eye, c)), norm(sub(aim, c))))
+        assert abs(n[0]) < 1e-12
+        u = (1.0, 0.0, 0.0)
+        v = norm(cross(n, u))  # in the y-z plane, along the plate's depth
+        hw, hd = plate_w / 2.0, plate_d / 2.0
+        corners = [add(add(c, mul(u, su * hw)), mul(v, sv * hd))
+                   for su, sv in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
+        m.group("plate%d" % e, "plate%d" % e)
+        m.face(corners, direction=n)
+        # must also face the camera
+        assert dot(n, sub(eye, c)) > 0.0
+        plates.append((c, n, u, v, corners, e))
+
+        d = norm(sub(c, eye))
+        rdir = reflect(d, n)
+        t = (light_y - c[1]) / rdir[1]
+        hit = add(c, mul(rdir, t))
+        tilt = math.degrees(math.acos(n[1]))
+        print("  plate%-5d centre (%.2f, %.3f, %.3f) tilt %.2f deg toward "
+              "camera; reflected ray vs. direction to light row centre: "
+              "%.4f deg; crosses y=%.1f at (x %.3f, z %.3f)"
+              % (e, c[0], c[1], c[2], tilt, angle_deg(rdir, sub(aim, c)),
+                 light_y, hit[0], hit[2]))
+        assert angle_deg(rdir, sub(aim, c)) < 0.5
+        assert abs(hit[2] - light_z) < 0.25
+
+    # Where each light's mirror highlight falls on each plate.
+    print("  mirror highlight of each light on each plate "
+          "(plate-local x in -3.8..3.8, depth in -0.4..0.4):")
+    for c, n, u, v, corners, e in plates:
+        cells = []
+        for lx, r in zip(light_xs, radii):
+            L = (lx, light_y, light_z)
+            Lm = sub(L, mul(n, 2.0 * dot(sub(L, c), n)))  # mirror image
+            d = sub(Lm, eye)
+            t = dot(sub(c, eye), n) / dot(d, n)
+            p = add(eye, mul(d, t))
+            lu, lv = dot(sub(p, c), u), dot(sub(p, c), v)
+            on = abs(lu) <= plate_w / 2 and abs(lv) <= plate_d / 2
+            cells.append("(%+.2f,%+.2f)%s" % (lu, lv, "" if on else "!OFF"))
+            assert on, ("highlight off plate", e, lx)
+        print("    plate%-5d " % e + " ".join(cells))
+
+    # Visibility: each plate's centre is seen unoccluded, and its reflected
+    # centre ray reaches the light row unoccluded by other plates.
+    plate_tris = [(e, (p[0], p[i], p[i + 1]))
+                  for (_, _, _, _, p, e) in plates for i in (1, 2)]
+    for c, n, u, v, corners, e in plates:
+        d = sub(c, eye)
+        for oe, tri in plate_tris:
+            if oe == e:
+                continue
+            t = ray_triangle(eye, d, tri)
+            assert t is None or t > 1.0, ("plate occluded", e, oe)
+            rd = sub(aim, c)
+            t = ray_triangle(c, rd, tri)
+            assert t is None or t > 1.0, ("reflection blocked", e, oe)
+        cols = [cam.project(p) for p in corners]
+        for col, row in cols:
+            assert 0 <= col <= width and 0 <= row <= height, (e, col, row)
+        print("  plate%-5d image rows %.1f..%.1f, columns %.1f..%.1f"
+              % (e, min(r for _, r in cols), max(r for _, r in cols),
+                 min(c_ for c_, _ in cols), max(c_ for c_, _ in cols)))
+
+    # Lights.
+    phi = (1.0 + math.sqrt(5.0)) / 2.0
+    ico = []
+    for a in (-1.0, 1.0):
+        for b in (-phi, phi):
+            ico += [(0.0, a, b), (a, b, 0.0), (b, 0.0, a)]
+    ico = [norm(p) for p in ico]
+    edge = min(length(sub(ico[i], ico[j]))
+               for i in range(12) for j in range(i + 1, 12))
+    adj = lambda i, j: abs(length(sub(ico[i], ico[j])) - edge) < 1e-9
+    ico_faces = [(i, j, k) for i in range(12) for j in range(i + 1, 12)
+                 for k in range(j + 1, 12) if adj(i, j) and adj(j, k)
+                 and adj(i, k)]
+    assert len(ico_faces) == 20
+    for i, (lx, r) in enumerate(zip(light_xs, radii)):
+        center = (lx, light_y, light_z)
+        m.group("light%d" % i, "light%d" % i)
+        for f in ico_faces:
+            m.face([add(center, mul(ico[k], r)) for k in f],
+                   away_from=center)
+        col, row = cam.project(center)
+        print("  light%d x %+.2f r %.2f Ke %.3f (Ke*r^2 = %.2f) at image "
+              "(%.1f, %.1f)" % (i, lx, r, power_k / (r * r), power_k, col,
+                                row))
+        assert 0 <= col <= width and 0 <= row <= height
+
+    # Dark floor and back wall.
+    fy, wz = -4.5, -6.0
+    m.group("floor", "floor")
+    m.face([(-30.0, fy, wz), (30.0, fy, wz), (30.0, fy, 20.0),
+            (-30.0, fy, 20.0)], direction=(0, 1, 0))
+    m.group("back_wall", "floor")
+    m.face([(-30.0, fy, wz), (30.0, fy, wz), (30.0, 15.0, wz),
+            (-30.0, 15.0, wz)], direction=(0, 0, 1))
+    # plates are above the floor
+    for _, _, _, _, corners, _ in plates:
+        assert min(p[1] for p in corners) > fy
+
+    folder = os.path.join(SCENES, name)
+    m.write(folder)
+    write_toml(folder, name, eye, target, fov, (0.0, 0.0, 0.0),
+               width, height, 64, 4)
+    return m
+
+
+# ================================================================ 3. checker
+def checker_plane():
+    name = "checker-plane"
+    m = Mesh(name)
+    m.material("check_a", (0.0, 0.0, 0.0), ke=(1.0, 1.0, 1.0))
+    m.material("check_b", (0.0, 0.0, 0.0), ke=(0.05, 0.05, 0.05))
+    nx, nz = 24, 40
+    x0, z0 = -12.0, -2.0
+    squares = {"check_a": [], "check_b": []}
+    for j in range(nz):
+        for i in range(nx):
+            xa, xb = x0 + i, x0 + i + 1
+            za, zb = z0 - j, z0 - j - 1
+            quad = [(xa, 0.0, za), (xb, 0.0, za), (xb, 0.0, zb),
+                    (xa, 0.0, zb)]
+            squares["check_a" if (i + j) % 2 == 0 else "check_b"].append(quad)
+    for mat in ("check_a", "check_b"):
+        m.group(mat, mat)
+        for q in squares[mat]:
+            m.face(q, direction=(0, 1, 0))
+    assert len(squares["check_a"]) + len(squares["check_b"]) == nx * nz
+
+    folder = os.path.join(SCENES, name)
+    m.write(folder)
+    write_toml(folder, name, (0.0, 1.5, 0.0), (0.0, 0.0, -8.0), 40.0,
+               (0.0, 0.0, 0.0), 128, 96, 16, 2)
+    return m
+
+
+README = """\
+# vrpt test scenes
+
+Generated by `tools/make_scenes.py` (committed output; regenerate with
+`python3 tools/make_scenes.py` from the repository root, do not edit by hand).
+
+- `cornell-box/`: the classic Cornell box (published measurements, mm) with a
+  glossy tall box; the general-purpose test scene.
+- `glossy-plates/`: Veach's plates scene, for importance sampling of glossy
+  lobes (BSDF vs. light sampling, MIS): four plates of Phong exponent
+  10..10000 reflecting four equal-power lights of increasing size.
+- `checker-plane/`: an emissive checkerboard plane seen at a slant; a pure 2D
+  pixel (antialiasing) integral with many edges, where stratification shows.
+"""
+
+
+def main():
+    os.makedirs(SCENES, exist_ok=True)
+    counts = [("cornell-box", cornell_box()),
+              ("glossy-plates", glossy_plates()),
+              ("checker-plane", checker_plane())]
+    with open(os.path.join(SCENES, "README.md"), "w") as fh:
+        fh.write(README)
+    for name, mesh in counts:
+        print("%-14s %5d vertices %5d triangles"
+              % (name, len(mesh.verts), mesh.triangle_count()))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
