@@ -81,6 +81,14 @@ mod tests {
         // Top row looks up.
         let (_, d) = cam.generate_ray(UVec2::new(1, 0), Vec2::new(0.0, 0.0));
         assert!((d - Vec3::new(0.0, 1.0, -1.0).normalize()).length() < 1e-6);
-        assert!(Camera::new(&CameraDesc { up: Vec3::NEG_Z, ..desc }, 2, 2).is_none());
+        assert!(Camera::new(
+            &CameraDesc {
+                up: Vec3::NEG_Z,
+                ..desc
+            },
+            2,
+            2
+        )
+        .is_none());
     }
 }

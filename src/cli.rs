@@ -149,7 +149,11 @@ pub fn render_settings(args: &RenderArgs, scene: &Scene) -> Result<RenderSetting
 }
 
 /// The metadata vrpt records in every EXR it writes.
-pub fn metadata(scene: &Scene, s: &RenderSettings, stats: &RenderStats) -> BTreeMap<String, String> {
+pub fn metadata(
+    scene: &Scene,
+    s: &RenderSettings,
+    stats: &RenderStats,
+) -> BTreeMap<String, String> {
     let strategy = Strategy::from_axes(s.sampler, s.directions).map_or("custom", |x| x.name());
     [
         ("scene", scene.source.display().to_string()),
@@ -162,7 +166,10 @@ pub fn metadata(scene: &Scene, s: &RenderSettings, stats: &RenderStats) -> BTree
         ("directions", s.directions.to_string()),
         ("strategy", strategy.to_string()),
         ("max_depth", s.max_depth.to_string()),
-        ("render_seconds", format!("{:.6}", stats.elapsed.as_secs_f64())),
+        (
+            "render_seconds",
+            format!("{:.6}", stats.elapsed.as_secs_f64()),
+        ),
         ("nonfinite_samples", stats.nonfinite.to_string()),
     ]
     .into_iter()
@@ -177,7 +184,11 @@ fn default_output(scene_path: &Path) -> PathBuf {
         scene_path.file_stem()
     };
     let stem = stem.map_or("render".into(), |s| s.to_string_lossy().into_owned());
-    let stem = if stem == "scene" { "render".to_string() } else { stem };
+    let stem = if stem == "scene" {
+        "render".to_string()
+    } else {
+        stem
+    };
     PathBuf::from(format!("{stem}.png"))
 }
 

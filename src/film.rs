@@ -146,7 +146,11 @@ mod tests {
         let mut all = Film::new(2, 1);
         for k in 0..10 {
             let v = Vec3::new(k as f32, 1.0, 0.5 * k as f32);
-            if k % 3 == 0 { a.add_sample(1, v) } else { b.add_sample(1, v) }
+            if k % 3 == 0 {
+                a.add_sample(1, v)
+            } else {
+                b.add_sample(1, v)
+            }
             all.add_sample(1, v);
         }
         assert!(a.merge(&b));

@@ -5,7 +5,9 @@
 //! Tone mapping for PNG: `v · 2^exposure`, clamped to [0, 1], then the sRGB transfer function.
 
 use crate::error::{Error, Result};
-use exr::prelude::{self as exr_prelude, AttributeValue, ReadChannels, ReadLayers, Text, WritableImage};
+use exr::prelude::{
+    self as exr_prelude, AttributeValue, ReadChannels, ReadLayers, Text, WritableImage,
+};
 use glam::Vec3;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -62,7 +64,11 @@ pub fn linear_to_srgb(v: f32) -> f32 {
 pub fn tonemap(v: Vec3, exposure: f32) -> [u8; 3] {
     let s = 2f32.powf(exposure);
     let q = |c: f32| {
-        let c = if c.is_finite() { (c * s).clamp(0.0, 1.0) } else { 0.0 };
+        let c = if c.is_finite() {
+            (c * s).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
         (linear_to_srgb(c) * 255.0 + 0.5) as u8
     };
     [q(v.x), q(v.y), q(v.z)]
@@ -123,7 +129,7 @@ pub fn write_exr(
         });
         let mut image = exr_prelude::Image::from_channels((w, height as usize), channels);
         for (k, v) in metadata {
-            image.attributes.other.insert(
+            image.layer_data.attributes.other.insert(
                 Text::from(format!("vrpt.{k}").as_str()),
                 AttributeValue::Text(Text::from(v.as_str())),
             );
@@ -182,7 +188,9 @@ pub fn read_exr(path: &Path) -> Result<RgbImage> {
         .no_deep_data()
         .largest_resolution_level()
         .rgb_channels(
-            |res: exr_prelude::Vec2<usize>, _: &exr_prelude::RgbChannels| -> Pixels { (res.width(), vec![Vec3::ZERO; res.width() * res.height()]) },
+            |res: exr_prelude::Vec2<usize>, _: &exr_prelude::RgbChannels| -> Pixels {
+                (res.width(), vec![Vec3::ZERO; res.width() * res.height()])
+            },
             |px: &mut Pixels, p: exr_prelude::Vec2<usize>, (r, g, b): (f32, f32, f32)| {
                 px.1[p.y() * px.0 + p.x()] = Vec3::new(r, g, b);
             },
@@ -196,7 +204,7 @@ pub fn read_exr(path: &Path) -> Result<RgbImage> {
         })?;
     let size = image.layer_data.size;
     let mut metadata = BTreeMap::new();
-    for (k, v) in &image.attributes.other {
+    for (k, v) in &image.layer_data.attributes.other {
         if let (Some(key), AttributeValue::Text(t)) = (k.to_string().strip_prefix("vrpt."), v) {
             metadata.insert(key.to_string(), t.to_string());
         }
@@ -218,7 +226,10 @@ mod tests {
         assert_eq!(linear_to_srgb(0.0), 0.0);
         assert!((linear_to_srgb(1.0) - 1.0).abs() < 1e-6);
         assert_eq!(tonemap(Vec3::new(0.0, 1.0, 4.0), 0.0), [0, 255, 255]);
-        assert_eq!(tonemap(Vec3::splat(0.25), 1.0), tonemap(Vec3::splat(0.5), 0.0));
+        assert_eq!(
+            tonemap(Vec3::splat(0.25), 1.0),
+            tonemap(Vec3::splat(0.5), 0.0)
+        );
         assert_eq!(tonemap(Vec3::splat(f32::NAN), 0.0), [0, 0, 0]);
     }
 

@@ -24,5 +24,6 @@ pub mod render;
 pub mod sampler;
 pub mod sampling;
 pub mod scene;
+pub mod stats;
 
 pub use error::{Error, Result};

@@ -101,8 +101,7 @@ pub fn render(
     settings: &RenderSettings,
     progress: &dyn Progress,
 ) -> Result<(Film, RenderStats)> {
-    if settings.width == 0 || settings.height == 0 || settings.spp == 0 || settings.max_depth == 0
-    {
+    if settings.width == 0 || settings.height == 0 || settings.spp == 0 || settings.max_depth == 0 {
         return Err(Error::Settings(
             "width, height, spp and max depth must be at least 1".into(),
         ));
@@ -114,9 +113,13 @@ pub fn render(
         ))
     })?;
     let run = || match settings.sampler {
-        SamplerKind::Independent => {
-            render_with(scene, &camera, settings, IndependentSampler::new(settings.seed), progress)
-        }
+        SamplerKind::Independent => render_with(
+            scene,
+            &camera,
+            settings,
+            IndependentSampler::new(settings.seed),
+            progress,
+        ),
         SamplerKind::Stratified => render_with(
             scene,
             &camera,

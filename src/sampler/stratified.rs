@@ -17,7 +17,7 @@ use glam::{UVec2, Vec2};
 pub fn grid_shape(n: u32) -> (u32, u32) {
     let n = n.max(1);
     let mut a = (n as f64).sqrt() as u32;
-    while a > 1 && n % a != 0 {
+    while a > 1 && !n.is_multiple_of(a) {
         a -= 1;
     }
     let a = a.max(1);

@@ -158,7 +158,11 @@ impl Scene {
             }
         });
         let camera = options.camera.unwrap_or_else(|| frame_bounds(lo, hi));
-        let extent = lo.abs().max(hi.abs()).max_element().max((hi - lo).max_element());
+        let extent = lo
+            .abs()
+            .max(hi.abs())
+            .max_element()
+            .max((hi - lo).max_element());
         Ok(Scene {
             source,
             accel,
@@ -236,7 +240,10 @@ pub fn load(path: &Path) -> Result<Scene> {
         match path.extension().and_then(|e| e.to_str()) {
             Some(e) if e.eq_ignore_ascii_case("toml") => {
                 let d = Description::load(path)?;
-                (path.parent().unwrap_or(Path::new(".")).join(&d.obj), Some(d))
+                (
+                    path.parent().unwrap_or(Path::new(".")).join(&d.obj),
+                    Some(d),
+                )
             }
             Some(e) if e.eq_ignore_ascii_case("obj") => {
                 let beside = path.with_file_name("scene.toml");

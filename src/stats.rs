@@ -1,0 +1,341 @@
+//! Statistics for the tests and the analysis: the chi-square goodness-of-fit test of a
+//! direction sampler against its pdf, the chi-square and normal tail probabilities it needs,
+//! Šidák's correction for many tests, and least-squares line fits (log-log slopes).
+//!
+//! The chi-square test bins directions on `(cosθ, φ)` about a chosen pole — equal-area bins,
+//! since `dω = d(cosθ) dφ` — over `cosθ ∈ [z_lo, 1]`, plus one bin for `cosθ < z_lo` and one for
+//! failed samples (`None`). Expected counts are `N ∫_bin pdf dω` by a K×K midpoint rule per bin;
+//! the failed bin expects `N (1 − ∫ pdf dω)`. Bins expecting fewer than 5 samples are pooled
+//! (smallest first) until the pool expects at least 5. The statistic `Σ (O−E)²/E` with
+//! `bins − 1` degrees of freedom gives the p-value.
+
+use crate::math::Frame;
+use glam::{Vec2, Vec3};
+use std::f64::consts::PI;
+
+/// Where and how finely to bin directions.
+#[derive(Clone, Copy, Debug)]
+pub struct Chi2Binning {
+    /// The pole of the binning (unit).
+    pub pole: Vec3,
+    /// Bins cover `cosθ ∈ [z_lo, 1]` about the pole; lower `cosθ` share one bin.
+    pub z_lo: f32,
+    pub z_bins: usize,
+    pub phi_bins: usize,
+    /// Midpoint-rule points per bin side for the expected counts.
+    pub quadrature: usize,
+}
+
+impl Default for Chi2Binning {
+    fn default() -> Self {
+        Chi2Binning {
+            pole: Vec3::Z,
+            z_lo: -1.0,
+            z_bins: 40,
+            phi_bins: 80,
+            quadrature: 6,
+        }
+    }
+}
+
+/// The outcome of a chi-square test.
+#[derive(Clone, Copy, Debug)]
+pub struct Chi2Result {
+    pub statistic: f64,
+    pub dof: usize,
+    pub p_value: f64,
+    /// `∫ pdf dω` over the sphere, by the same quadrature (1 for a normalized pdf).
+    pub pdf_integral: f64,
+    /// Samples that came back `None`.
+    pub failed: usize,
+}
+
+/// Chi-square test of `sample(u)` (directions, `None` for a failed sample) against `pdf(ω)`
+/// (per solid angle), with `n` points `u` from `points`.
+pub fn chi2_directions(
+    mut sample: impl FnMut(Vec2) -> Option<Vec3>,
+    pdf: impl Fn(Vec3) -> f32,
+    mut points: impl FnMut() -> Vec2,
+    n: usize,
+    b: &Chi2Binning,
+) -> Chi2Result {
+    let frame = Frame::from_normal(b.pole);
+    let nz = b.z_bins;
+    let np = b.phi_bins;
+    let z_lo = b.z_lo as f64;
+    let dz = (1.0 - z_lo) / nz as f64;
+    let dphi = 2.0 * PI / np as f64;
+    // bins: nz*np regular, then "below z_lo", then "failed"
+    let below = nz * np;
+    let failed_bin = below + 1;
+    let mut observed = vec![0f64; nz * np + 2];
+    for _ in 0..n {
+        match sample(points()) {
+            None => observed[failed_bin] += 1.0,
+            Some(w) => {
+                let l = frame.to_local(w.normalize());
+                let z = l.z.clamp(-1.0, 1.0) as f64;
+                if z < z_lo {
+                    observed[below] += 1.0;
+                } else {
+                    let mut phi = (l.y as f64).atan2(l.x as f64);
+                    if phi < 0.0 {
+                        phi += 2.0 * PI;
+                    }
+                    let iz = (((z - z_lo) / dz) as usize).min(nz - 1);
+                    let ip = ((phi / dphi) as usize).min(np - 1);
+                    observed[iz * np + ip] += 1.0;
+                }
+            }
+        }
+    }
+    // Expected mass per bin by a K×K midpoint rule in (z, φ).
+    let k = b.quadrature.max(1);
+    let dir = |z: f64, phi: f64| {
+        let r = (1.0 - z * z).max(0.0).sqrt();
+        frame.to_world(Vec3::new(
+            (r * phi.cos()) as f32,
+            (r * phi.sin()) as f32,
+            z as f32,
+        ))
+    };
+    let integrate = |z0: f64, z1: f64, p0: f64, p1: f64, kz: usize, kp: usize| {
+        let (hz, hp) = ((z1 - z0) / kz as f64, (p1 - p0) / kp as f64);
+        let mut s = 0.0;
+        for a in 0..kz {
+            for c in 0..kp {
+                let z = z0 + (a as f64 + 0.5) * hz;
+                let phi = p0 + (c as f64 + 0.5) * hp;
+                s += pdf(dir(z, phi)) as f64;
+            }
+        }
+        s * hz * hp
+    };
+    let mut expected = vec![0f64; nz * np + 2];
+    for iz in 0..nz {
+        for ip in 0..np {
+            let z0 = z_lo + iz as f64 * dz;
+            let p0 = ip as f64 * dphi;
+            expected[iz * np + ip] = integrate(z0, z0 + dz, p0, p0 + dphi, k, k);
+        }
+    }
+    // Below z_lo: intervals that double in width away from z_lo, so a pdf that is still steep
+    // just below z_lo (a sharp lobe) is integrated as finely as the bins above it.
+    let (mut hi, mut width) = (z_lo, dz);
+    while hi > -1.0 {
+        let lo = (hi - width).max(-1.0);
+        expected[below] += integrate(lo, hi, 0.0, 2.0 * PI, k, np * k);
+        hi = lo;
+        width *= 2.0;
+    }
+    let total: f64 = expected[..failed_bin].iter().sum();
+    expected[failed_bin] = (1.0 - total).max(0.0);
+    for e in &mut expected {
+        *e *= n as f64;
+    }
+    let (statistic, dof) = pooled_chi2(&observed, &expected);
+    Chi2Result {
+        statistic,
+        dof,
+        p_value: chi2_sf(statistic, dof as f64),
+        pdf_integral: total,
+        failed: observed[failed_bin] as usize,
+    }
+}
+
+/// Pearson's statistic over bins, pooling bins expecting < 5 (smallest first); a bin that
+/// expects nothing but observes something makes the statistic infinite.
+pub fn pooled_chi2(observed: &[f64], expected: &[f64]) -> (f64, usize) {
+    let mut idx: Vec<usize> = (0..observed.len()).collect();
+    idx.sort_by(|&a, &b| expected[a].total_cmp(&expected[b]));
+    let (mut stat, mut bins) = (0.0, 0usize);
+    let (mut po, mut pe) = (0.0, 0.0);
+    for &i in &idx {
+        let (o, e) = (observed[i], expected[i]);
+        if e <= 0.0 {
+            if o > 0.0 {
+                return (f64::INFINITY, 1);
+            }
+            continue;
+        }
+        if e < 5.0 || pe > 0.0 && pe < 5.0 {
+            po += o;
+            pe += e;
+            if pe >= 5.0 {
+                stat += (po - pe).powi(2) / pe;
+                bins += 1;
+                po = 0.0;
+                pe = 0.0;
+            }
+            continue;
+        }
+        stat += (o - e).powi(2) / e;
+        bins += 1;
+    }
+    if pe > 0.0 {
+        stat += (po - pe).powi(2) / pe;
+        bins += 1;
+    }
+    (stat, bins.saturating_sub(1).max(1))
+}
+
+/// `ln Γ(x)` for `x > 0` (Lanczos, g = 7, 9 terms; ~1e-15 relative).
+pub fn ln_gamma(x: f64) -> f64 {
+    const G: [f64; 9] = [
+        0.999_999_999_999_809_9,
+        676.520_368_121_885_1,
+        -1_259.139_216_722_402_8,
+        771.323_428_777_653_1,
+        -176.615_029_162_140_6,
+        12.507_343_278_686_905,
+        -0.138_571_095_265_720_12,
+        9.984_369_578_019_572e-6,
+        1.505_632_735_149_311_6e-7,
+    ];
+    if x < 0.5 {
+        return (PI / (PI * x).sin()).ln() - ln_gamma(1.0 - x);
+    }
+    let x = x - 1.0;
+    let mut a = G[0];
+    let t = x + 7.5;
+    for (i, g) in G.iter().enumerate().skip(1) {
+        a += g / (x + i as f64);
+    }
+    0.5 * (2.0 * PI).ln() + (x + 0.5) * t.ln() - t + a.ln()
+}
+
+/// The regularized upper incomplete gamma function `Q(a, x) = Γ(a, x)/Γ(a)`.
+pub fn gamma_q(a: f64, x: f64) -> f64 {
+    if x <= 0.0 {
+        return 1.0;
+    }
+    let ln_pre = -x + a * x.ln() - ln_gamma(a);
+    if x < a + 1.0 {
+        // series for P(a, x)
+        let (mut sum, mut term, mut ap) = (1.0 / a, 1.0 / a, a);
+        for _ in 0..10_000 {
+            ap += 1.0;
+            term *= x / ap;
+            sum += term;
+            if term.abs() < sum.abs() * 1e-16 {
+                break;
+            }
+        }
+        (1.0 - sum * ln_pre.exp()).clamp(0.0, 1.0)
+    } else {
+        // Lentz's continued fraction for Q(a, x)
+        let tiny = 1e-300;
+        let mut b = x + 1.0 - a;
+        let mut c = 1.0 / tiny;
+        let mut d = 1.0 / b;
+        let mut h = d;
+        for i in 1..10_000 {
+            let an = -(i as f64) * (i as f64 - a);
+            b += 2.0;
+            d = an * d + b;
+            if d.abs() < tiny {
+                d = tiny;
+            }
+            c = b + an / c;
+            if c.abs() < tiny {
+                c = tiny;
+            }
+            d = 1.0 / d;
+            let del = d * c;
+            h *= del;
+            if (del - 1.0).abs() < 1e-16 {
+                break;
+            }
+        }
+        (ln_pre.exp() * h).clamp(0.0, 1.0)
+    }
+}
+
+/// Survival function of the chi-square distribution: `P(X > x)` with `k` degrees of freedom.
+pub fn chi2_sf(x: f64, k: f64) -> f64 {
+    if x.is_infinite() {
+        return 0.0;
+    }
+    gamma_q(0.5 * k, 0.5 * x)
+}
+
+/// Two-sided tail of the standard normal: `P(|Z| > z)`, by `erfc(z/√2)`.
+pub fn normal_two_sided_p(z: f64) -> f64 {
+    // Q(1/2, z²/2) = erfc(|z|/√2)
+    gamma_q(0.5, 0.5 * z * z)
+}
+
+/// Per-test significance for `m` tests at family-wise significance `alpha` (Šidák).
+pub fn sidak(alpha: f64, m: usize) -> f64 {
+    1.0 - (1.0 - alpha).powf(1.0 / m.max(1) as f64)
+}
+
+/// `|z|` beyond which a two-sided test at significance `alpha` rejects (bisection on the tail).
+pub fn normal_critical_value(alpha: f64) -> f64 {
+    let (mut lo, mut hi) = (0.0f64, 40.0f64);
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if normal_two_sided_p(mid) > alpha {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// Least-squares line `y = a + b x`: returns `(a, b)`.
+pub fn fit_line(xs: &[f64], ys: &[f64]) -> (f64, f64) {
+    let n = xs.len() as f64;
+    let mx = xs.iter().sum::<f64>() / n;
+    let my = ys.iter().sum::<f64>() / n;
+    let sxy: f64 = xs.iter().zip(ys).map(|(x, y)| (x - mx) * (y - my)).sum();
+    let sxx: f64 = xs.iter().map(|x| (x - mx).powi(2)).sum();
+    let b = sxy / sxx;
+    (my - b * mx, b)
+}
+
+/// Slope of `log y` against `log x` (e.g. the convergence rate of an error against spp).
+pub fn log_log_slope(xs: &[f64], ys: &[f64]) -> f64 {
+    let lx: Vec<f64> = xs.iter().map(|x| x.ln()).collect();
+    let ly: Vec<f64> = ys.iter().map(|y| y.ln()).collect();
+    fit_line(&lx, &ly).1
+}
+
+/// Pearson's correlation coefficient.
+pub fn pearson(xs: &[f64], ys: &[f64]) -> f64 {
+    let n = xs.len() as f64;
+    let mx = xs.iter().sum::<f64>() / n;
+    let my = ys.iter().sum::<f64>() / n;
+    let sxy: f64 = xs.iter().zip(ys).map(|(x, y)| (x - mx) * (y - my)).sum();
+    let sxx: f64 = xs.iter().map(|x| (x - mx).powi(2)).sum();
+    let syy: f64 = ys.iter().map(|y| (y - my).powi(2)).sum();
+    sxy / (sxx * syy).sqrt()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn gamma_and_tails_match_known_values() {
+        assert!((ln_gamma(5.0) - 24f64.ln()).abs() < 1e-12);
+        assert!((ln_gamma(0.5) - PI.sqrt().ln()).abs() < 1e-12);
+        // chi-square with 1 dof: P(X > 3.841459) = 0.05; with 10 dof: P(X > 23.209) = 0.01
+        assert!((chi2_sf(3.841_459, 1.0) - 0.05).abs() < 1e-6);
+        assert!((chi2_sf(23.209_25, 10.0) - 0.01).abs() < 1e-6);
+        // a large dof: mean k, so P(X > k) is near 1/2
+        assert!((chi2_sf(1000.0, 1000.0) - 0.494).abs() < 0.01);
+        assert!((normal_two_sided_p(1.959_964) - 0.05).abs() < 1e-6);
+        assert!((normal_critical_value(0.05) - 1.959_964).abs() < 1e-5);
+        assert!((sidak(0.01, 1) - 0.01).abs() < 1e-15);
+    }
+
+    #[test]
+    fn line_fit_and_correlation() {
+        let xs = [1.0, 2.0, 4.0, 8.0];
+        let ys: Vec<f64> = xs.iter().map(|x: &f64| 3.0 * x.powf(-1.5)).collect();
+        assert!((log_log_slope(&xs, &ys) + 1.5).abs() < 1e-12);
+        assert!((pearson(&xs, &xs) - 1.0).abs() < 1e-12);
+    }
+}

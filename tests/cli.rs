@@ -1,0 +1,242 @@
+//! The `vrpt` binary end to end: a small Cornell box render to PNG and EXR, and one clear error
+//! line with a non-zero exit (never a panic) for each kind of bad input.
+
+mod common;
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn vrpt(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_vrpt"))
+        .args(args)
+        .output()
+        .expect("run vrpt")
+}
+
+fn assert_one_line_error(out: &Output, what: &str, expect: &str) {
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{what}: should fail");
+    assert!(!stderr.contains("panicked"), "{what}: panicked: {stderr}");
+    let lines: Vec<&str> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
+    assert_eq!(lines.len(), 1, "{what}: one line expected, got: {stderr}");
+    assert!(
+        lines[0].contains(expect),
+        "{what}: '{}' lacks '{expect}'",
+        lines[0]
+    );
+}
+
+#[test]
+fn renders_the_cornell_box_to_png_and_exr() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("cb.png");
+    let scene = common::cornell_path().join("cornell-box.obj");
+    let out = vrpt(&[
+        "render",
+        scene.to_str().unwrap(),
+        "-o",
+        png.to_str().unwrap(),
+        "--width",
+        "32",
+        "--height",
+        "24",
+        "--spp",
+        "16",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("Mrays/s") && stderr.contains("samples/s"),
+        "{stderr}"
+    );
+    let img = image::open(&png).unwrap().to_rgb8();
+    assert_eq!(img.dimensions(), (32, 24));
+    // the light is in view (white), the box is not black
+    assert!(img.pixels().any(|p| p.0.iter().all(|&c| c == 255)));
+    // the classic view: the red wall on the left, the green wall on the right
+    let redness = |x0: u32, x1: u32| {
+        let mut s = 0.0f64;
+        for y in 0..24 {
+            for x in x0..x1 {
+                let p = img.get_pixel(x, y).0;
+                s += p[0] as f64 - p[1] as f64;
+            }
+        }
+        s
+    };
+    assert!(
+        redness(0, 6) > 0.0 && redness(26, 32) < 0.0,
+        "{} {}",
+        redness(0, 6),
+        redness(26, 32)
+    );
+
+    let exr = dir.path().join("cb.exr");
+    let var = dir.path().join("var.exr");
+    let out = vrpt(&[
+        "render",
+        common::cornell_path().to_str().unwrap(),
+        "-o",
+        exr.to_str().unwrap(),
+        "--variance",
+        var.to_str().unwrap(),
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--spp",
+        "9",
+        "--seed",
+        "5",
+        "--max-depth",
+        "3",
+        "--strategy",
+        "importance",
+        "--quiet",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(out.stderr.is_empty(), "--quiet prints nothing");
+    let img = vrpt::image_io::read_exr(&exr).unwrap();
+    assert_eq!((img.width, img.height), (16, 16));
+    let m = &img.metadata;
+    assert_eq!(m["spp"], "9");
+    assert_eq!(m["seed"], "5");
+    assert_eq!(m["max_depth"], "3");
+    assert_eq!(m["sampler"], "independent");
+    assert_eq!(m["directions"], "phong");
+    assert_eq!(m["strategy"], "importance");
+    assert!(m["scene"].ends_with("cornell-box.obj"));
+    assert!(m["render_seconds"].parse::<f64>().unwrap() > 0.0);
+    let v = vrpt::image_io::read_exr(&var).unwrap();
+    assert!(v.pixels.iter().all(|p| p.min_element() >= 0.0));
+    assert!(v.pixels.iter().any(|p| p.max_element() > 0.0));
+}
+
+#[test]
+fn bad_input_gives_one_line_and_nonzero_exit() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let cb = common::cornell_path();
+    let cb = cb.to_str().unwrap();
+    let bad_obj = common::write(d, "bad.obj", "v 0 0 0\nv 1 0 0\nv 0 1 oops\nf 1 2 3\n");
+    let out_png = d.join("x.png");
+    let o = out_png.to_str().unwrap();
+
+    let missing = d.join("missing.obj");
+    assert_one_line_error(
+        &vrpt(&["render", missing.to_str().unwrap(), "-o", o]),
+        "missing",
+        "not found",
+    );
+    assert_one_line_error(
+        &vrpt(&["render", bad_obj.to_str().unwrap(), "-o", o]),
+        "malformed",
+        "line 3",
+    );
+    assert_one_line_error(
+        &vrpt(&["render", cb, "-o", o, "--spp", "abc"]),
+        "spp abc",
+        "--spp",
+    );
+    assert_one_line_error(
+        &vrpt(&["render", cb, "-o", o, "--spp", "0"]),
+        "spp 0",
+        "--spp",
+    );
+    assert_one_line_error(
+        &vrpt(&["render", cb, "-o", o, "--sampler", "sobol"]),
+        "sampler",
+        "sobol",
+    );
+    assert_one_line_error(
+        &vrpt(&["render", cb, "-o", o, "--bogus"]),
+        "unknown flag",
+        "--bogus",
+    );
+    assert_one_line_error(
+        &vrpt(&[
+            "render",
+            cb,
+            "-o",
+            o,
+            "--strategy",
+            "importance",
+            "--directions",
+            "uniform",
+        ]),
+        "conflicting strategy",
+        "--strategy importance",
+    );
+    assert_one_line_error(
+        &vrpt(&["render", cb, "-o", "/nonexistent-dir/x.png", "--spp", "1"]),
+        "unwritable",
+        "/nonexistent-dir",
+    );
+    let txt = d.join("x.txt");
+    assert_one_line_error(
+        &vrpt(&["render", cb, "-o", txt.to_str().unwrap()]),
+        "format",
+        ".exr or .png",
+    );
+    assert!(!Path::new(o).exists(), "no output on failure");
+}
+
+#[test]
+fn a_failed_run_leaves_the_previous_image_intact() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("keep.png");
+    std::fs::write(&png, b"previous image").unwrap();
+    let bad_obj = common::write(dir.path(), "bad.obj", "v 0 0 0\nf 1 2 3\n");
+    let out = vrpt(&[
+        "render",
+        bad_obj.to_str().unwrap(),
+        "-o",
+        png.to_str().unwrap(),
+    ]);
+    assert!(!out.status.success());
+    assert_eq!(std::fs::read(&png).unwrap(), b"previous image");
+    // no temporary files are left behind
+    let names: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert!(
+        names.iter().all(|n| !n.to_string_lossy().ends_with(".tmp")),
+        "{names:?}"
+    );
+}
+
+#[test]
+fn help_explains_the_flags() {
+    let out = vrpt(&["render", "--help"]);
+    assert!(out.status.success());
+    let s = String::from_utf8_lossy(&out.stdout);
+    for flag in [
+        "--spp",
+        "--width",
+        "--height",
+        "--max-depth",
+        "--seed",
+        "--threads",
+        "--quiet",
+        "--sampler",
+        "--directions",
+        "--strategy",
+        "--exposure",
+        "--variance",
+    ] {
+        assert!(s.contains(flag), "help lacks {flag}");
+    }
+    assert!(
+        s.contains("square spp"),
+        "help says square spp stratify best"
+    );
+}

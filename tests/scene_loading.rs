@@ -1,0 +1,208 @@
+//! Scene loading: OBJ + MTL + scene.toml into triangles, materials and emitters, and a clear
+//! error for each kind of bad input.
+
+mod common;
+
+use common::write;
+use glam::Vec3;
+use vrpt::error::Error;
+use vrpt::scene;
+
+const MTL: &str = "\
+newmtl white
+Kd 0.7 0.7 0.7
+newmtl shiny
+Kd 0.6 0.5 0.4
+Ks 0.6 0.2 0.1
+Ns 50
+newmtl lamp
+Kd 0 0 0
+Ke 10 8 6
+";
+
+const OBJ: &str = "\
+mtllib test.mtl
+v 0 0 0
+v 1 0 0
+v 1 0 1
+v 0 0 1
+v 0 1 0
+v 1 1 0
+v 0.5 2 0.5
+vn 0 1 0
+usemtl white
+f 1//1 4//1 3//1 2//1
+usemtl shiny
+f 1 2 6 5
+usemtl lamp
+f 5 6 7
+usemtl nosuchmaterial
+f 1 2 7
+";
+
+#[test]
+fn obj_with_mtl_loads_triangles_materials_and_emitters() {
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "test.mtl", MTL);
+    let obj = write(dir.path(), "test.obj", OBJ);
+    let s = scene::load(&obj).unwrap();
+    // two quads (2 triangles each) + 2 triangles
+    assert_eq!(s.triangle_count(), 6);
+    // white, shiny, lamp + the grey fallback for the unknown name
+    assert_eq!(s.materials.len(), 4);
+    let shiny = s.materials.iter().find(|m| m.name == "shiny").unwrap();
+    // Kd + Ks = 1.2 in red: both scaled by 1/1.2 in that channel only
+    assert!((shiny.kd - Vec3::new(0.5, 0.5, 0.4)).length() < 1e-6);
+    assert!((shiny.ks - Vec3::new(0.5, 0.2, 0.1)).length() < 1e-6);
+    assert_eq!(shiny.exponent, 50.0);
+    let lamp = s.materials.iter().find(|m| m.name == "lamp").unwrap();
+    assert_eq!(lamp.emission, Vec3::new(10.0, 8.0, 6.0));
+    assert_eq!(s.emitters.len(), 1);
+    // the lamp triangle (0,1,0) (1,1,0) (0.5,2,0.5): area = |e1 × e2| / 2
+    let e1 = Vec3::new(1.0, 0.0, 0.0);
+    let e2 = Vec3::new(0.5, 1.0, 0.5);
+    assert!((s.emitters[0].area - 0.5 * e1.cross(e2).length()).abs() < 1e-6);
+    assert!(s.warnings.iter().any(|w| w.contains("nosuchmaterial")));
+    assert!(s
+        .warnings
+        .iter()
+        .any(|w| w.contains("shiny") && w.contains("scaled")));
+    // a scene with emitters has a black environment by default
+    assert_eq!(s.environment, Vec3::ZERO);
+    // each triangle's material: the floor quad is 'white' and has the file's normal
+    let white = s.materials.iter().position(|m| m.name == "white").unwrap() as u32;
+    let floor: Vec<_> = s.shading.iter().filter(|t| t.material == white).collect();
+    assert_eq!(floor.len(), 2);
+    assert!(floor.iter().all(|t| t.normals[0] == Vec3::Y));
+}
+
+#[test]
+fn missing_mtl_falls_back_to_grey_with_a_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = write(dir.path(), "test.obj", OBJ);
+    let s = scene::load(&obj).unwrap();
+    assert!(s
+        .warnings
+        .iter()
+        .any(|w| w.contains("test.mtl") && w.contains("not found")));
+    assert_eq!(s.materials.len(), 1);
+    assert!(s.emitters.is_empty());
+    // no emitters: a uniform white environment so the scene is visible
+    assert_eq!(s.environment, Vec3::ONE);
+}
+
+#[test]
+fn scene_toml_sets_camera_environment_and_defaults() {
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "test.mtl", MTL);
+    write(dir.path(), "test.obj", OBJ);
+    write(
+        dir.path(),
+        "scene.toml",
+        "obj = \"test.obj\"\n[camera]\neye = [0, 1, 5]\ntarget = [0, 1, 0]\nfov = 30\n\
+         [environment]\nradiance = [0.5, 0.5, 0.5]\n[render]\nwidth = 40\nspp = 3\n",
+    );
+    for path in [
+        dir.path().to_path_buf(),
+        dir.path().join("scene.toml"),
+        dir.path().join("test.obj"),
+    ] {
+        let s = scene::load(&path).unwrap();
+        assert_eq!(s.camera.eye, Vec3::new(0.0, 1.0, 5.0));
+        assert_eq!(s.camera.fov_deg, 30.0);
+        assert_eq!(s.environment, Vec3::splat(0.5));
+        assert_eq!(s.defaults.width, Some(40));
+        assert_eq!(s.defaults.spp, Some(3));
+        assert_eq!(s.defaults.height, None);
+    }
+}
+
+fn load_err(files: &[(&str, &str)], target: &str) -> Error {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, text) in files {
+        write(dir.path(), name, text);
+    }
+    match scene::load(&dir.path().join(target)) {
+        Ok(_) => panic!("loading {target} should fail"),
+        Err(e) => e,
+    }
+}
+
+#[test]
+fn bad_input_gives_its_error() {
+    let e = load_err(&[], "nothing.obj");
+    assert!(matches!(e, Error::NotFound { .. }), "{e}");
+
+    let e = load_err(
+        &[("a.obj", "v 0 0 0\nv 1 0 abc\nv 0 1 0\nf 1 2 3\n")],
+        "a.obj",
+    );
+    assert!(matches!(e, Error::Obj { .. }), "{e}");
+    assert!(e.to_string().contains("line 2"), "{e}");
+
+    let e = load_err(
+        &[("a.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n")],
+        "a.obj",
+    );
+    assert!(
+        matches!(e, Error::Obj { .. }) && e.to_string().contains("line 4"),
+        "{e}"
+    );
+
+    let e = load_err(
+        &[
+            (
+                "a.obj",
+                "mtllib a.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl m\nf 1 2 3\n",
+            ),
+            ("a.mtl", "newmtl m\nKd 0.5 zero 0.5\n"),
+        ],
+        "a.obj",
+    );
+    assert!(matches!(e, Error::Mtl { .. }), "{e}");
+    assert!(e.to_string().contains("a.mtl"), "{e}");
+
+    let e = load_err(
+        &[("scene.toml", "obj = \"a.obj\"\n[camera\n")],
+        "scene.toml",
+    );
+    assert!(
+        matches!(e, Error::Toml { .. }) && e.to_string().contains("line 2"),
+        "{e}"
+    );
+
+    let e = load_err(
+        &[("scene.toml", "obj = \"a.obj\"\nspp = 3\n")],
+        "scene.toml",
+    );
+    assert!(matches!(e, Error::Toml { .. }), "{e}");
+
+    let e = load_err(&[("a.obj", "# nothing here\n")], "a.obj");
+    assert!(
+        matches!(e, Error::Scene { .. }) && e.to_string().contains("no"),
+        "{e}"
+    );
+
+    let e = load_err(&[("notes.txt", "hello")], "notes.txt");
+    assert!(matches!(e, Error::Scene { .. }), "{e}");
+
+    // a folder with no scene.toml
+    let e = load_err(&[("a.obj", "v 0 0 0\n")], "");
+    assert!(e.to_string().contains("scene.toml"), "{e}");
+}
+
+#[test]
+fn shipped_scenes_load() {
+    for name in ["cornell-box", "glossy-plates", "checker-plane"] {
+        let s = common::shipped(name);
+        assert!(!s.emitters.is_empty(), "{name} has emitters");
+        assert!(s.warnings.is_empty(), "{name}: {:?}", s.warnings);
+    }
+    let cb = common::shipped("cornell-box");
+    assert_eq!(cb.triangle_count(), 32);
+    assert_eq!(cb.defaults.spp, Some(64));
+    // the light faces down: its triangles' normals point to -y
+    for e in &cb.emitters {
+        assert!(cb.shading[e.prim as usize].ng.y < -0.99);
+    }
+}
