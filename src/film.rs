@@ -92,6 +92,19 @@ impl Film {
         }
     }
 
+    /// Kish's effective sample size of pixel `i` per channel, `(Σx)²/Σx²`: about the number of
+    /// samples that carry the pixel's value (for a value that is `c` with probability `p` and 0
+    /// otherwise it is `n·p`). Small values mean a mean made of a few rare samples, whose
+    /// distribution is far from normal.
+    pub fn effective_samples(&self, i: usize) -> DVec3 {
+        let s2 = self.sum_sq[i];
+        DVec3::select(
+            s2.cmpgt(DVec3::ZERO),
+            self.sum[i] * self.sum[i] / s2,
+            DVec3::ZERO,
+        )
+    }
+
     /// The mean image, row-major, as f32.
     pub fn mean_image(&self) -> Vec<Vec3> {
         (0..self.len()).map(|i| self.mean(i).as_vec3()).collect()
@@ -137,6 +150,13 @@ mod tests {
         assert!((f.mean(0).x - m).abs() < 1e-12);
         assert!((f.sample_variance(0).x - s2).abs() < 1e-12);
         assert!((f.variance_of_mean(0).x - s2 / 4.0).abs() < 1e-12);
+        // (1+2+4+7)² / (1+4+16+49)
+        assert!((f.effective_samples(0).x - 196.0 / 70.0).abs() < 1e-12);
+        let mut g = Film::new(1, 1);
+        for k in 0..100 {
+            g.add_sample(0, Vec3::splat(if k % 10 == 0 { 5.0 } else { 0.0 }));
+        }
+        assert!((g.effective_samples(0).x - 10.0).abs() < 1e-12);
     }
 
     #[test]
