@@ -134,7 +134,7 @@ fn check_all_combinations(name: &str, scene: &Scene, max_depth: u32) {
             );
         }
     }
-    eprint!("{report}bound {z_crit:.2}\n");
+    eprintln!("{report}bound {z_crit:.2}");
 }
 
 /// The Cornell box with a light 6.6× larger (300 × 300 mm instead of 130 × 105; Ke 4 3 1) so
