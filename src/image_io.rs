@@ -1,10 +1,12 @@
-//! Image files: EXR (linear RGB f32, with vrpt's metadata as string attributes) and PNG
-//! (tone-mapped 8-bit sRGB). Every write goes to a temporary file in the target folder which is
+//! Image files: EXR (linear RGB f32, with vrpt's metadata as string attributes, and optionally
+//! the per-pixel variance of the mean as channels `variance.R/G/B`) and PNG (tone-mapped 8-bit
+//! sRGB). Every write goes to a temporary file in the target folder which is
 //! then renamed over the target, so an interrupted or failed write never destroys an older image.
 //!
 //! Tone mapping for PNG: `v · 2^exposure`, clamped to [0, 1], then the sRGB transfer function.
 
 use crate::error::{Error, Result};
+use exr::image::read::specific_channels::ReadSpecificChannel;
 use exr::prelude::{
     self as exr_prelude, AttributeValue, ReadChannels, ReadLayers, Text, WritableImage,
 };
@@ -45,6 +47,8 @@ pub struct RgbImage {
     pub height: u32,
     /// Row-major, top row first.
     pub pixels: Vec<Vec3>,
+    /// The variance of each pixel's mean, when the file has `variance.R/G/B` channels.
+    pub variance: Option<Vec<Vec3>>,
     /// vrpt's metadata (keys without the `vrpt.` prefix).
     pub metadata: BTreeMap<String, String>,
 }
@@ -112,29 +116,57 @@ fn write_atomically(
 }
 
 /// Write `pixels` (row-major, `width × height`) as a linear RGB f32 EXR with `metadata`
-/// (stored as string attributes named `vrpt.KEY`).
+/// (stored as string attributes named `vrpt.KEY`) and, if given, the variance of each pixel's
+/// mean as channels `variance.R`, `variance.G`, `variance.B`.
 pub fn write_exr(
     path: &Path,
     width: u32,
     height: u32,
     pixels: &[Vec3],
+    variance: Option<&[Vec3]>,
     metadata: &BTreeMap<String, String>,
 ) -> Result<()> {
     assert_eq!(pixels.len(), width as usize * height as usize);
-    write_atomically(path, |tmp| {
-        let w = width as usize;
-        let channels = exr_prelude::SpecificChannels::rgb(|p: exr_prelude::Vec2<usize>| {
-            let v = pixels[p.y() * w + p.x()];
-            (v.x, v.y, v.z)
-        });
-        let mut image = exr_prelude::Image::from_channels((w, height as usize), channels);
+    let w = width as usize;
+    let size = (w, height as usize);
+    let attributes = |layer: &mut exr_prelude::LayerAttributes| {
         for (k, v) in metadata {
-            image.layer_data.attributes.other.insert(
+            layer.other.insert(
                 Text::from(format!("vrpt.{k}").as_str()),
                 AttributeValue::Text(Text::from(v.as_str())),
             );
         }
-        image.write().to_file(tmp).map_err(|e| e.to_string())
+    };
+    write_atomically(path, |tmp| {
+        let result = match variance {
+            None => {
+                let channels = exr_prelude::SpecificChannels::rgb(|p: exr_prelude::Vec2<usize>| {
+                    let v = pixels[p.y() * w + p.x()];
+                    (v.x, v.y, v.z)
+                });
+                let mut image = exr_prelude::Image::from_channels(size, channels);
+                attributes(&mut image.layer_data.attributes);
+                image.write().to_file(tmp)
+            }
+            Some(var) => {
+                assert_eq!(var.len(), pixels.len());
+                let channels = exr_prelude::SpecificChannels::build()
+                    .with_channel("R")
+                    .with_channel("G")
+                    .with_channel("B")
+                    .with_channel("variance.R")
+                    .with_channel("variance.G")
+                    .with_channel("variance.B")
+                    .with_pixel_fn(|p: exr_prelude::Vec2<usize>| {
+                        let (v, s) = (pixels[p.y() * w + p.x()], var[p.y() * w + p.x()]);
+                        (v.x, v.y, v.z, s.x, s.y, s.z)
+                    });
+                let mut image = exr_prelude::Image::from_channels(size, channels);
+                attributes(&mut image.layer_data.attributes);
+                image.write().to_file(tmp)
+            }
+        };
+        result.map_err(|e| e.to_string())
     })
 }
 
@@ -171,28 +203,36 @@ pub fn write_image(
     exposure: f32,
 ) -> Result<()> {
     match Format::from_path(path)? {
-        Format::Exr => write_exr(path, width, height, pixels, metadata),
+        Format::Exr => write_exr(path, width, height, pixels, None, metadata),
         Format::Png => write_png(path, width, height, pixels, exposure),
     }
 }
 
-/// Read the first RGB layer of an EXR and vrpt's metadata.
+/// Read the first RGB layer of an EXR, its `variance.*` channels if any, and vrpt's metadata.
 pub fn read_exr(path: &Path) -> Result<RgbImage> {
     if !path.exists() {
         return Err(Error::NotFound {
             path: path.to_path_buf(),
         });
     }
-    type Pixels = (usize, Vec<Vec3>);
+    type Px = (f32, f32, f32, f32, f32, f32);
+    type Pixels = (usize, Vec<Px>);
     let image = exr_prelude::read()
         .no_deep_data()
         .largest_resolution_level()
-        .rgb_channels(
-            |res: exr_prelude::Vec2<usize>, _: &exr_prelude::RgbChannels| -> Pixels {
-                (res.width(), vec![Vec3::ZERO; res.width() * res.height()])
+        .specific_channels()
+        .required("R")
+        .required("G")
+        .required("B")
+        .optional("variance.R", f32::NAN)
+        .optional("variance.G", f32::NAN)
+        .optional("variance.B", f32::NAN)
+        .collect_pixels(
+            |res: exr_prelude::Vec2<usize>, _| -> Pixels {
+                (res.width(), vec![(0.0, 0.0, 0.0, 0.0, 0.0, 0.0); res.width() * res.height()])
             },
-            |px: &mut Pixels, p: exr_prelude::Vec2<usize>, (r, g, b): (f32, f32, f32)| {
-                px.1[p.y() * px.0 + p.x()] = Vec3::new(r, g, b);
+            |px: &mut Pixels, p: exr_prelude::Vec2<usize>, v: Px| {
+                px.1[p.y() * px.0 + p.x()] = v;
             },
         )
         .first_valid_layer()
@@ -209,10 +249,13 @@ pub fn read_exr(path: &Path) -> Result<RgbImage> {
             metadata.insert(key.to_string(), t.to_string());
         }
     }
+    let px = &image.layer_data.channel_data.pixels.1;
+    let has_variance = image.layer_data.channel_data.channels.3.is_some();
     Ok(RgbImage {
         width: size.width() as u32,
         height: size.height() as u32,
-        pixels: image.layer_data.channel_data.pixels.1,
+        pixels: px.iter().map(|p| Vec3::new(p.0, p.1, p.2)).collect(),
+        variance: has_variance.then(|| px.iter().map(|p| Vec3::new(p.3, p.4, p.5)).collect()),
         metadata,
     })
 }
@@ -241,11 +284,17 @@ mod tests {
         let px: Vec<Vec3> = (0..6).map(|i| Vec3::new(i as f32, 0.5, -1.0)).collect();
         let mut meta = BTreeMap::new();
         meta.insert("spp".to_string(), "64".to_string());
-        write_exr(&path, 3, 2, &px, &meta).unwrap();
+        write_exr(&path, 3, 2, &px, None, &meta).unwrap();
         let img = read_exr(&path).unwrap();
         assert_eq!((img.width, img.height), (3, 2));
         assert_eq!(img.pixels, px);
+        assert_eq!(img.variance, None);
         assert_eq!(img.metadata.get("spp").map(String::as_str), Some("64"));
+        let var: Vec<Vec3> = (0..6).map(|i| Vec3::splat(i as f32 * 0.25)).collect();
+        write_exr(&path, 3, 2, &px, Some(&var), &meta).unwrap();
+        let img = read_exr(&path).unwrap();
+        assert_eq!(img.pixels, px);
+        assert_eq!(img.variance, Some(var));
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -12,6 +12,7 @@
 #![forbid(unsafe_code)]
 
 pub mod accel;
+pub mod analysis;
 pub mod camera;
 pub mod cli;
 pub mod error;

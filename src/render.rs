@@ -140,6 +140,50 @@ pub fn render(
     }
 }
 
+/// How a render is split into passes, and when it stops.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct PassPlan {
+    /// Samples per pixel per pass (the stratification unit); `None`: one pass of all the spp.
+    pub pass_spp: Option<u32>,
+    /// Stop after the first whole pass that ends past this wall time (at least one pass runs).
+    pub time_limit: Option<Duration>,
+}
+
+/// Render `settings.spp` samples per pixel as passes of `plan.pass_spp` samples (sample indices
+/// `first_sample + k·pass_spp ..`), merging them exactly, and stop early at a whole pass when
+/// `plan.time_limit` runs out. Returns the film, the summed stats and the spp reached.
+pub fn render_passes(
+    scene: &Scene,
+    settings: &RenderSettings,
+    plan: &PassPlan,
+    progress: &dyn Progress,
+) -> Result<(Film, RenderStats, u32)> {
+    let pass = plan.pass_spp.unwrap_or(settings.spp).clamp(1, settings.spp.max(1));
+    let start = Instant::now();
+    let mut film = Film::new(settings.width, settings.height);
+    let mut stats = RenderStats::default();
+    let mut done = 0u32;
+    while done < settings.spp {
+        let n = pass.min(settings.spp - done);
+        let pass_settings = RenderSettings {
+            spp: n,
+            first_sample: settings.first_sample + done,
+            ..settings.clone()
+        };
+        let (f, s) = render(scene, &pass_settings, progress)?;
+        film.merge(&f);
+        stats.rays += s.rays;
+        stats.samples += s.samples;
+        stats.nonfinite += s.nonfinite;
+        done += n;
+        if plan.time_limit.is_some_and(|t| start.elapsed() >= t) {
+            break;
+        }
+    }
+    stats.elapsed = start.elapsed();
+    Ok((film, stats, done))
+}
+
 /// One tile's result: pixel sums and counters.
 struct TileResult {
     origin: UVec2,

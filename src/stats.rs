@@ -251,6 +251,58 @@ pub fn gamma_q(a: f64, x: f64) -> f64 {
     }
 }
 
+/// The regularized incomplete beta function `I_x(a, b)` (continued fraction, Lentz).
+pub fn incomplete_beta(x: f64, a: f64, b: f64) -> f64 {
+    if x <= 0.0 {
+        return 0.0;
+    }
+    if x >= 1.0 {
+        return 1.0;
+    }
+    let ln_front = ln_gamma(a + b) - ln_gamma(a) - ln_gamma(b) + a * x.ln() + b * (1.0 - x).ln();
+    // the continued fraction converges for x < (a+1)/(a+b+2); use the symmetry otherwise
+    if x > (a + 1.0) / (a + b + 2.0) {
+        return 1.0 - incomplete_beta(1.0 - x, b, a);
+    }
+    let tiny = 1e-300;
+    let (mut c, mut d) = (1.0, 1.0 - (a + b) * x / (a + 1.0));
+    if d.abs() < tiny {
+        d = tiny;
+    }
+    d = 1.0 / d;
+    let mut h = d;
+    for m in 1..10_000 {
+        let m = m as f64;
+        for num in [
+            m * (b - m) * x / ((a + 2.0 * m - 1.0) * (a + 2.0 * m)),
+            -(a + m) * (a + b + m) * x / ((a + 2.0 * m) * (a + 2.0 * m + 1.0)),
+        ] {
+            d = 1.0 + num * d;
+            if d.abs() < tiny {
+                d = tiny;
+            }
+            c = 1.0 + num / c;
+            if c.abs() < tiny {
+                c = tiny;
+            }
+            d = 1.0 / d;
+            h *= d * c;
+        }
+        if (d * c - 1.0).abs() < 1e-15 {
+            break;
+        }
+    }
+    (ln_front.exp() * h / a).clamp(0.0, 1.0)
+}
+
+/// Two-sided tail of Student's t with `dof` degrees of freedom: `P(|T| > t)`.
+pub fn student_t_two_sided_p(t: f64, dof: f64) -> f64 {
+    if !t.is_finite() {
+        return 0.0;
+    }
+    incomplete_beta(dof / (dof + t * t), 0.5 * dof, 0.5)
+}
+
 /// Survival function of the chi-square distribution: `P(X > x)` with `k` degrees of freedom.
 pub fn chi2_sf(x: f64, k: f64) -> f64 {
     if x.is_infinite() {
@@ -329,6 +381,11 @@ mod tests {
         assert!((normal_two_sided_p(1.959_964) - 0.05).abs() < 1e-6);
         assert!((normal_critical_value(0.05) - 1.959_964).abs() < 1e-5);
         assert!((sidak(0.01, 1) - 0.01).abs() < 1e-15);
+        // Student t: P(|T| > 2.228) = 0.05 with 10 dof; P(|T| > 12.706) = 0.05 with 1 dof
+        assert!((student_t_two_sided_p(2.228_139, 10.0) - 0.05).abs() < 1e-6);
+        assert!((student_t_two_sided_p(12.706_2, 1.0) - 0.05).abs() < 1e-5);
+        assert!((student_t_two_sided_p(0.0, 5.0) - 1.0).abs() < 1e-12);
+        assert!((incomplete_beta(0.3, 2.0, 3.0) - 0.3483).abs() < 1e-4);
     }
 
     #[test]

@@ -5,7 +5,8 @@
 //! N gives a 1×N grid of slabs: square N stratify best). Sample `j` of the pass takes stratum
 //! `π_d(j)`, where `π_d` is Kensler's hashed permutation of `0..N` keyed by (seed, pixel, pass,
 //! dimension) — a different order per dimension, so dimensions are not correlated — and is
-//! jittered uniformly inside it. Each pass of N samples (sample indices `pN .. (p+1)N`) is a
+//! jittered uniformly inside it (the permutation key also holds N, so sets of different sizes
+//! never share strata orders). Each pass of N samples (sample indices `pN .. (p+1)N`) is a
 //! complete, independent stratified set, so runs of several passes stay unbiased and
 //! stratified pass by pass.
 
@@ -71,7 +72,7 @@ pub struct StratifiedSampler {
     seed: u64,
     n: u32,
     grid: (u32, u32),
-    /// Key of the current (pixel, pass).
+    /// Key of the current (pixel, pass, N).
     key: u64,
     /// Index of the current sample within its pass.
     j: u32,
@@ -110,7 +111,7 @@ impl Sampler for StratifiedSampler {
         self.key = hash_words(&[
             self.seed ^ 0x5354_5241_5449_4649, // "STRATIFI": other streams than independent
             ((pixel.x as u64) << 32) | pixel.y as u64,
-            pass as u64,
+            ((self.n as u64) << 32) | pass as u64,
         ]);
         self.dim = 0;
     }

@@ -15,6 +15,7 @@ use crate::accel::{Accel, Hit};
 use crate::camera::CameraDesc;
 use crate::error::{Error, Result};
 use crate::material::Material;
+use crate::math::hash_words;
 use description::{Description, RenderSection};
 use glam::Vec3;
 use std::path::{Path, PathBuf};
@@ -80,6 +81,9 @@ pub struct Scene {
     pub ray_epsilon: f32,
     /// Things the user should hear about (missing materials, scaled materials, …).
     pub warnings: Vec<String>,
+    /// A hash of everything that determines the image (geometry, materials, camera,
+    /// environment): references record it, so a stale reference is detected.
+    pub hash: u64,
 }
 
 /// Optional settings for [`Scene::build`].
@@ -158,6 +162,7 @@ impl Scene {
             }
         });
         let camera = options.camera.unwrap_or_else(|| frame_bounds(lo, hi));
+        let hash = content_hash(&mesh, &materials, &camera, environment);
         let extent = lo
             .abs()
             .max(hi.abs())
@@ -175,6 +180,7 @@ impl Scene {
             bounds: (lo, hi),
             ray_epsilon: 1e-5 * extent.max(1e-3),
             warnings,
+            hash,
         })
     }
 
@@ -202,6 +208,30 @@ impl Scene {
             material: sh.material,
         }
     }
+}
+
+/// Hash of the scene's content, in input order: every float by its bits.
+fn content_hash(mesh: &Mesh, materials: &[Material], camera: &CameraDesc, env: Vec3) -> u64 {
+    fn put(words: &mut Vec<u64>, vs: &[Vec3]) {
+        for v in vs {
+            words.extend(v.to_array().map(|x| x.to_bits() as u64));
+        }
+    }
+    let mut w: Vec<u64> = Vec::with_capacity(mesh.triangles.len() * 20 + 64);
+    for t in &mesh.triangles {
+        put(&mut w, &t.p);
+        if let Some(n) = &t.normals {
+            put(&mut w, n);
+        }
+        w.push(t.material as u64);
+    }
+    for m in materials {
+        put(&mut w, &[m.kd, m.ks, m.emission]);
+        w.push(m.exponent.to_bits() as u64);
+    }
+    put(&mut w, &[camera.eye, camera.target, camera.up, env]);
+    w.push(camera.fov_deg.to_bits() as u64);
+    hash_words(&w)
 }
 
 /// A camera looking at the bounding box from +z, far enough back to see all of it at 40°.

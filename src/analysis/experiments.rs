@@ -1,0 +1,391 @@
+//! Experiments over strategies, each run an independent render (seed `seed + run`):
+//!
+//! - [`compare`]: every strategy at the same spp (or the same wall time per run) over K runs;
+//!   per strategy the mean time, the mean MSE / relMSE / RMSE / MAE of a run against the
+//!   reference, the variance of a run (across runs), the bias test, the MSE reduction against
+//!   the baseline (independent, or the first strategy) `MSE_base / MSE`, and the relative
+//!   efficiency `(MSE_base · t_base) / (MSE · t)` (efficiency is `1/(MSE·time)`).
+//! - [`converge`]: for each strategy and each spp, K renders from scratch (a prefix of a longer
+//!   stratified run is not stratified), the mean MSE and relMSE, and the least-squares slope of
+//!   `log MSE` against `log spp` (−1 for independent samples, steeper with stratification).
+
+use crate::analysis::metrics::{bias_test, metrics, variance_across_runs, Metrics};
+use crate::error::{Error, Result};
+use crate::image_io::RgbImage;
+use crate::material::Directions;
+use crate::render::{render_passes, NoProgress, PassPlan, RenderSettings, Strategy};
+use crate::sampler::SamplerKind;
+use crate::scene::Scene;
+use crate::stats::log_log_slope;
+use glam::Vec3;
+use std::time::Duration;
+
+/// A point of the (sampler, directions) grid, named by its preset where it has one.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct StrategySpec {
+    pub sampler: SamplerKind,
+    pub directions: Directions,
+}
+
+impl StrategySpec {
+    /// The preset's name (`combined`), or `sampler+directions` (`stratified+cosine`).
+    pub fn name(&self) -> String {
+        match Strategy::from_axes(self.sampler, self.directions) {
+            Some(s) => s.name().to_string(),
+            None => format!("{}+{}", self.sampler, self.directions),
+        }
+    }
+
+    /// Parse a preset name or `sampler+directions`.
+    pub fn parse(s: &str) -> std::result::Result<Self, String> {
+        let s = s.trim();
+        if let Some(p) = Strategy::ALL.into_iter().find(|p| p.name() == s) {
+            let (sampler, directions) = p.axes();
+            return Ok(StrategySpec {
+                sampler,
+                directions,
+            });
+        }
+        let (a, b) = s.split_once('+').ok_or_else(|| {
+            format!(
+                "unknown strategy '{s}': use independent, stratified, importance, combined, \
+                 or SAMPLER+DIRECTIONS (e.g. stratified+cosine)"
+            )
+        })?;
+        let sampler = SamplerKind::from_name(a.trim())
+            .ok_or_else(|| format!("unknown sampler '{a}' in '{s}' (independent, stratified)"))?;
+        let directions = Directions::from_name(b.trim()).ok_or_else(|| {
+            format!("unknown directions '{b}' in '{s}' (uniform, cosine, phong)")
+        })?;
+        Ok(StrategySpec {
+            sampler,
+            directions,
+        })
+    }
+
+    /// The four presets.
+    pub fn presets() -> Vec<StrategySpec> {
+        Strategy::ALL
+            .into_iter()
+            .map(|p| {
+                let (sampler, directions) = p.axes();
+                StrategySpec {
+                    sampler,
+                    directions,
+                }
+            })
+            .collect()
+    }
+
+    /// All six (sampler, directions) pairs.
+    pub fn all_pairs() -> Vec<StrategySpec> {
+        let mut v = Vec::new();
+        for sampler in [SamplerKind::Independent, SamplerKind::Stratified] {
+            for directions in [Directions::Uniform, Directions::Cosine, Directions::Phong] {
+                v.push(StrategySpec {
+                    sampler,
+                    directions,
+                });
+            }
+        }
+        v
+    }
+}
+
+/// What every experiment needs besides the strategies.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ExperimentSettings {
+    pub width: u32,
+    pub height: u32,
+    pub max_depth: u32,
+    /// Run k uses seed `seed + k`.
+    pub seed: u64,
+    pub runs: u32,
+    pub threads: Option<usize>,
+}
+
+/// Told about each finished render of an experiment (for a progress bar).
+pub trait ExperimentProgress: Sync {
+    /// `label` (strategy, run, spp) finished; `weight` is its share of the whole experiment.
+    fn finished(&self, label: &str, weight: u64);
+}
+
+impl ExperimentProgress for indicatif::ProgressBar {
+    fn finished(&self, label: &str, weight: u64) {
+        self.set_message(label.to_string());
+        self.inc(weight);
+    }
+}
+
+/// No progress reporting.
+pub struct Silent;
+
+impl ExperimentProgress for Silent {
+    fn finished(&self, _: &str, _: u64) {}
+}
+
+/// Check that `reference` fits the scene and settings: same size, and, where the reference
+/// records them, the same scene hash and max depth.
+pub fn check_reference(scene: &Scene, reference: &RgbImage, s: &ExperimentSettings) -> Result<()> {
+    let err = |m: String| Error::Settings(format!("reference: {m}"));
+    if (reference.width, reference.height) != (s.width, s.height) {
+        return Err(err(format!(
+            "{}×{} image, but the experiment renders {}×{}",
+            reference.width, reference.height, s.width, s.height
+        )));
+    }
+    if let Some(h) = reference.metadata.get("scene_hash") {
+        if *h != format!("{:016x}", scene.hash) {
+            return Err(err(format!(
+                "made from another version of the scene (scene hash {h}, the scene is {:016x}): \
+                 render the reference again",
+                scene.hash
+            )));
+        }
+    }
+    if let Some(d) = reference.metadata.get("max_depth") {
+        if *d != s.max_depth.to_string() {
+            return Err(err(format!(
+                "rendered with max depth {d}, the experiment uses {}",
+                s.max_depth
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// One strategy's row of a comparison.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct CompareRow {
+    pub strategy: String,
+    pub runs: u32,
+    /// Mean spp per run (equal-time runs reach different spp).
+    pub spp: f64,
+    /// Mean wall time per run.
+    pub seconds: f64,
+    /// Mean over runs of each run's error metrics.
+    pub mse: f64,
+    pub rel_mse: f64,
+    pub rmse: f64,
+    pub mae: f64,
+    /// Per-pixel variance of one run, across runs (averaged over pixels and channels).
+    pub variance: f64,
+    /// Bias test of the runs against the reference: Student's t and its two-sided p.
+    pub bias_t: f64,
+    pub bias_p: f64,
+    /// `MSE_baseline / MSE`.
+    pub mse_reduction: f64,
+    /// `(MSE_baseline · t_baseline) / (MSE · t)`.
+    pub efficiency: f64,
+}
+
+/// A comparison: one row per strategy and each strategy's first run's image.
+#[derive(Clone, Debug)]
+pub struct Comparison {
+    pub rows: Vec<CompareRow>,
+    pub baseline: String,
+    pub images: Vec<Vec<Vec3>>,
+    /// The reference's mean variance of the mean, if it records one: the floor under every MSE.
+    pub reference_variance: Option<f64>,
+}
+
+fn mean_of<T>(v: &[T], f: impl Fn(&T) -> f64) -> f64 {
+    v.iter().map(f).sum::<f64>() / v.len() as f64
+}
+
+/// Compare `strategies` at `spp` per run (or `equal_time` per run, in passes of `spp`).
+pub fn compare(
+    scene: &Scene,
+    reference: &RgbImage,
+    strategies: &[StrategySpec],
+    spp: u32,
+    equal_time: Option<Duration>,
+    s: &ExperimentSettings,
+    progress: &dyn ExperimentProgress,
+) -> Result<Comparison> {
+    check_reference(scene, reference, s)?;
+    if strategies.is_empty() || s.runs < 2 || spp == 0 {
+        return Err(Error::Settings(
+            "compare needs at least one strategy, 2 runs and 1 spp".into(),
+        ));
+    }
+    let mut rows = Vec::new();
+    let mut images = Vec::new();
+    for st in strategies {
+        let mut runs: Vec<Vec<Vec3>> = Vec::new();
+        let (mut secs, mut spps, mut ms) = (Vec::new(), Vec::new(), Vec::<Metrics>::new());
+        for k in 0..s.runs {
+            let settings = RenderSettings {
+                width: s.width,
+                height: s.height,
+                spp: if equal_time.is_some() { u32::MAX / 2 } else { spp },
+                first_sample: 0,
+                max_depth: s.max_depth,
+                seed: s.seed + k as u64,
+                sampler: st.sampler,
+                directions: st.directions,
+                threads: s.threads,
+            };
+            let plan = PassPlan {
+                pass_spp: Some(spp),
+                time_limit: equal_time,
+            };
+            let (film, stats, reached) = render_passes(scene, &settings, &plan, &NoProgress)?;
+            let img = film.mean_image();
+            ms.push(metrics(&img, &reference.pixels));
+            secs.push(stats.elapsed.as_secs_f64());
+            spps.push(reached as f64);
+            runs.push(img);
+            progress.finished(&format!("{} run {}/{}", st.name(), k + 1, s.runs), 1);
+        }
+        let bias = bias_test(&runs, &reference.pixels);
+        rows.push(CompareRow {
+            strategy: st.name(),
+            runs: s.runs,
+            spp: mean_of(&spps, |x| *x),
+            seconds: mean_of(&secs, |x| *x),
+            mse: mean_of(&ms, |m| m.mse),
+            rel_mse: mean_of(&ms, |m| m.rel_mse),
+            rmse: mean_of(&ms, |m| m.rmse),
+            mae: mean_of(&ms, |m| m.mae),
+            variance: variance_across_runs(&runs),
+            bias_t: bias.t,
+            bias_p: bias.p,
+            mse_reduction: 1.0,
+            efficiency: 1.0,
+        });
+        images.push(runs.swap_remove(0));
+    }
+    let base = rows
+        .iter()
+        .position(|r| r.strategy == "independent")
+        .unwrap_or(0);
+    let (base_mse, base_t) = (rows[base].mse, rows[base].seconds);
+    for r in &mut rows {
+        r.mse_reduction = base_mse / r.mse;
+        r.efficiency = (base_mse * base_t) / (r.mse * r.seconds);
+    }
+    let reference_variance = reference
+        .variance
+        .as_ref()
+        .map(|v| v.iter().map(|p| (p.x + p.y + p.z) as f64 / 3.0).sum::<f64>() / v.len() as f64);
+    Ok(Comparison {
+        baseline: rows[base].strategy.clone(),
+        rows,
+        images,
+        reference_variance,
+    })
+}
+
+/// One point of a convergence sweep.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct ConvergePoint {
+    pub strategy: String,
+    pub spp: u32,
+    pub mse: f64,
+    pub rel_mse: f64,
+    /// Mean wall time per run.
+    pub seconds: f64,
+}
+
+/// A sweep: points in (strategy, spp) order, and per strategy the fitted log-log slopes of MSE
+/// and relMSE against spp.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Convergence {
+    pub points: Vec<ConvergePoint>,
+    pub slopes: Vec<ConvergeSlope>,
+}
+
+/// The fitted convergence rates of one strategy.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct ConvergeSlope {
+    pub strategy: String,
+    pub mse_slope: f64,
+    pub rel_mse_slope: f64,
+}
+
+/// Render each strategy at each spp from scratch, `runs` times, against `reference`.
+pub fn converge(
+    scene: &Scene,
+    reference: &RgbImage,
+    strategies: &[StrategySpec],
+    spps: &[u32],
+    s: &ExperimentSettings,
+    progress: &dyn ExperimentProgress,
+) -> Result<Convergence> {
+    check_reference(scene, reference, s)?;
+    if strategies.is_empty() || spps.len() < 2 || s.runs < 1 || spps.contains(&0) {
+        return Err(Error::Settings(
+            "converge needs at least one strategy, two spp values ≥ 1 and one run".into(),
+        ));
+    }
+    let mut points = Vec::new();
+    let mut slopes = Vec::new();
+    for st in strategies {
+        let mut xs = Vec::new();
+        let (mut ys, mut rs) = (Vec::new(), Vec::new());
+        for &spp in spps {
+            let (mut mse, mut rel, mut secs) = (0.0, 0.0, 0.0);
+            for k in 0..s.runs {
+                let settings = RenderSettings {
+                    width: s.width,
+                    height: s.height,
+                    spp,
+                    first_sample: 0,
+                    max_depth: s.max_depth,
+                    seed: s.seed + k as u64,
+                    sampler: st.sampler,
+                    directions: st.directions,
+                    threads: s.threads,
+                };
+                let (film, stats, _) =
+                    render_passes(scene, &settings, &PassPlan::default(), &NoProgress)?;
+                let m = metrics(&film.mean_image(), &reference.pixels);
+                mse += m.mse;
+                rel += m.rel_mse;
+                secs += stats.elapsed.as_secs_f64();
+                progress.finished(
+                    &format!("{} spp {spp} run {}/{}", st.name(), k + 1, s.runs),
+                    spp as u64,
+                );
+            }
+            let k = s.runs as f64;
+            points.push(ConvergePoint {
+                strategy: st.name(),
+                spp,
+                mse: mse / k,
+                rel_mse: rel / k,
+                seconds: secs / k,
+            });
+            xs.push(spp as f64);
+            ys.push(mse / k);
+            rs.push(rel / k);
+        }
+        slopes.push(ConvergeSlope {
+            strategy: st.name(),
+            mse_slope: log_log_slope(&xs, &ys),
+            rel_mse_slope: log_log_slope(&xs, &rs),
+        });
+    }
+    Ok(Convergence { points, slopes })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn strategy_names_round_trip() {
+        for s in StrategySpec::all_pairs() {
+            assert_eq!(StrategySpec::parse(&s.name()).unwrap(), s);
+        }
+        assert_eq!(StrategySpec::parse("combined").unwrap().name(), "combined");
+        assert_eq!(
+            StrategySpec::parse("stratified+cosine").unwrap().name(),
+            "stratified+cosine"
+        );
+        assert!(StrategySpec::parse("sobol+phong").is_err());
+        assert!(StrategySpec::parse("best").is_err());
+        assert_eq!(StrategySpec::presets().len(), 4);
+    }
+}

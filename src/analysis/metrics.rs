@@ -1,0 +1,226 @@
+//! Error metrics of an image `x` against a reference `r`, averaged over pixels and the three
+//! channels (images are row-major `Vec3`s of the same size):
+//!
+//! - MSE `mean((x − r)²)`, RMSE `√MSE`, MAE `mean(|x − r|)`, mean signed error `mean(x − r)`;
+//! - relative MSE `mean((x − r)² / (r² + ε))` with `ε = 0.01` ([`REL_EPSILON`]), so dark pixels
+//!   count without dividing by zero;
+//! - over K independent runs of the same estimator: the per-pixel variance of one run (the
+//!   sample variance across runs, averaged over pixels), and the bias test: each run's mean
+//!   signed error `e_k` is an average over all pixels, so nearly normal; `t = ē / (s_e/√K)` is
+//!   Student-t with K − 1 degrees of freedom when the estimator is unbiased (the reference's own
+//!   error is a constant shift shared by all runs, negligible when its spp ≫ K·spp);
+//! - per-pixel bias z-scores of a mean image with known variance against a reference with known
+//!   variance: `z = (m − r)/√(v_m + v_r)`.
+
+use crate::stats::student_t_two_sided_p;
+use glam::Vec3;
+
+/// ε of the relative MSE.
+pub const REL_EPSILON: f64 = 0.01;
+
+/// Error metrics of one image against a reference.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Metrics {
+    pub mse: f64,
+    pub rel_mse: f64,
+    pub rmse: f64,
+    pub mae: f64,
+    pub mean_signed_error: f64,
+}
+
+fn check_sizes(a: &[Vec3], b: &[Vec3]) {
+    assert_eq!(a.len(), b.len(), "images of different sizes");
+    assert!(!a.is_empty(), "empty image");
+}
+
+/// MSE, relMSE, RMSE, MAE and mean signed error of `image` against `reference`.
+pub fn metrics(image: &[Vec3], reference: &[Vec3]) -> Metrics {
+    check_sizes(image, reference);
+    let (mut se, mut rel, mut ae, mut signed) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+    for (x, r) in image.iter().zip(reference) {
+        for c in 0..3 {
+            let (x, r) = (x[c] as f64, r[c] as f64);
+            let d = x - r;
+            se += d * d;
+            rel += d * d / (r * r + REL_EPSILON);
+            ae += d.abs();
+            signed += d;
+        }
+    }
+    let n = (image.len() * 3) as f64;
+    Metrics {
+        mse: se / n,
+        rel_mse: rel / n,
+        rmse: (se / n).sqrt(),
+        mae: ae / n,
+        mean_signed_error: signed / n,
+    }
+}
+
+/// Per-pixel relative squared error `(x − r)²/(r² + ε)`, averaged over channels: the error map.
+pub fn relative_error_map(image: &[Vec3], reference: &[Vec3]) -> Vec<f64> {
+    check_sizes(image, reference);
+    image
+        .iter()
+        .zip(reference)
+        .map(|(x, r)| {
+            (0..3)
+                .map(|c| {
+                    let (x, r) = (x[c] as f64, r[c] as f64);
+                    (x - r).powi(2) / (r * r + REL_EPSILON)
+                })
+                .sum::<f64>()
+                / 3.0
+        })
+        .collect()
+}
+
+/// The per-pixel sample variance across runs (the variance of one run's estimate), averaged
+/// over pixels and channels. Needs at least 2 runs.
+pub fn variance_across_runs(runs: &[Vec<Vec3>]) -> f64 {
+    assert!(runs.len() >= 2, "variance needs at least two runs");
+    let k = runs.len() as f64;
+    let n = runs[0].len();
+    let mut total = 0.0;
+    for i in 0..n {
+        for c in 0..3 {
+            let mean = runs.iter().map(|r| r[i][c] as f64).sum::<f64>() / k;
+            let ss: f64 = runs.iter().map(|r| (r[i][c] as f64 - mean).powi(2)).sum();
+            total += ss / (k - 1.0);
+        }
+    }
+    total / (n * 3) as f64
+}
+
+/// The bias test over runs: `(t, p)` for the hypothesis that the runs' mean signed error is 0.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct BiasTest {
+    /// Student's t of the mean signed error.
+    pub t: f64,
+    /// Two-sided p-value with K − 1 degrees of freedom.
+    pub p: f64,
+}
+
+/// Test whether K ≥ 2 runs are unbiased against `reference` (see the module doc).
+pub fn bias_test(runs: &[Vec<Vec3>], reference: &[Vec3]) -> BiasTest {
+    assert!(runs.len() >= 2, "the bias test needs at least two runs");
+    let e: Vec<f64> = runs
+        .iter()
+        .map(|r| metrics(r, reference).mean_signed_error)
+        .collect();
+    let k = e.len() as f64;
+    let mean = e.iter().sum::<f64>() / k;
+    let sd = (e.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (k - 1.0)).sqrt();
+    let t = if sd > 0.0 {
+        mean / (sd / k.sqrt())
+    } else if mean == 0.0 {
+        0.0
+    } else {
+        f64::INFINITY.copysign(mean)
+    };
+    BiasTest {
+        t,
+        p: student_t_two_sided_p(t.abs(), k - 1.0),
+    }
+}
+
+/// Per-pixel, per-channel bias z-scores `(m − r)/√(v_m + v_r)` (0 where both variances are 0
+/// and the values agree, ±∞ where they are 0 and the values differ).
+pub fn bias_z_scores(
+    mean: &[Vec3],
+    mean_variance: &[Vec3],
+    reference: &[Vec3],
+    reference_variance: Option<&[Vec3]>,
+) -> Vec<Vec3> {
+    check_sizes(mean, reference);
+    check_sizes(mean, mean_variance);
+    (0..mean.len())
+        .map(|i| {
+            let vr = reference_variance.map_or(Vec3::ZERO, |v| v[i]);
+            let v = mean_variance[i] + vr;
+            let d = mean[i] - reference[i];
+            Vec3::from_array(std::array::from_fn(|c| {
+                if v[c] > 0.0 {
+                    d[c] / v[c].sqrt()
+                } else if d[c] == 0.0 {
+                    0.0
+                } else {
+                    f32::INFINITY.copysign(d[c])
+                }
+            }))
+        })
+        .collect()
+}
+
+/// A perceptually ordered colour map (a 5-stop approximation of viridis), `t ∈ [0, 1]`.
+pub fn colormap(t: f64) -> [u8; 3] {
+    const STOPS: [[f64; 3]; 5] = [
+        [68.0, 1.0, 84.0],
+        [59.0, 82.0, 139.0],
+        [33.0, 145.0, 140.0],
+        [94.0, 201.0, 98.0],
+        [253.0, 231.0, 37.0],
+    ];
+    let t = if t.is_finite() { t.clamp(0.0, 1.0) } else { 1.0 } * 4.0;
+    let i = (t as usize).min(3);
+    let f = t - i as f64;
+    std::array::from_fn(|c| (STOPS[i][c] + f * (STOPS[i + 1][c] - STOPS[i][c])).round() as u8)
+}
+
+/// False-colour an error map on a log scale over `[lo, hi]` (values ≤ lo are darkest).
+pub fn false_colour(values: &[f64], lo: f64, hi: f64) -> Vec<[u8; 3]> {
+    let (l0, l1) = (lo.max(1e-30).log10(), hi.max(lo * 10.0).log10());
+    values
+        .iter()
+        .map(|&v| colormap((v.max(1e-30).log10() - l0) / (l1 - l0)))
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn metrics_of_known_images() {
+        let r = vec![Vec3::splat(1.0), Vec3::new(0.0, 2.0, 4.0)];
+        let x = vec![Vec3::splat(2.0), Vec3::new(0.0, 2.0, 1.0)];
+        let m = metrics(&x, &r);
+        // differences: 1,1,1, 0,0,-3 over 6 values
+        assert!((m.mse - 12.0 / 6.0).abs() < 1e-12);
+        assert!((m.rmse - 2f64.sqrt()).abs() < 1e-12);
+        assert!((m.mae - 6.0 / 6.0).abs() < 1e-12);
+        assert!((m.mean_signed_error - 0.0).abs() < 1e-12);
+        let rel = (3.0 * 1.0 / 1.01 + 9.0 / (16.0 + 0.01)) / 6.0;
+        assert!((m.rel_mse - rel).abs() < 1e-12);
+        assert_eq!(metrics(&r, &r), Metrics::default());
+        let map = relative_error_map(&x, &r);
+        assert!((map[0] - 1.0 / 1.01).abs() < 1e-12);
+        assert!((map[1] - 9.0 / 16.01 / 3.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn variance_and_bias_over_runs() {
+        let r = vec![Vec3::ZERO; 2];
+        let runs = vec![vec![Vec3::splat(1.0); 2], vec![Vec3::splat(-1.0); 2], vec![Vec3::splat(3.0); 2]];
+        // per value: mean 1, sample variance ((0)² + (−2)² + 2²)/2 = 4
+        assert!((variance_across_runs(&runs) - 4.0).abs() < 1e-12);
+        // e = 1, −1, 3: mean 1, sd 2, t = 1/(2/√3) = 0.866
+        let b = bias_test(&runs, &r);
+        assert!((b.t - 3f64.sqrt() / 2.0).abs() < 1e-12);
+        assert!(b.p > 0.4 && b.p < 0.6);
+        let biased = vec![vec![Vec3::splat(1.0); 2], vec![Vec3::splat(1.01); 2], vec![Vec3::splat(0.99); 2]];
+        assert!(bias_test(&biased, &r).p < 1e-3);
+        let z = bias_z_scores(&[Vec3::splat(2.0)], &[Vec3::splat(3.0)], &[Vec3::ONE], Some(&[Vec3::ONE]));
+        assert!((z[0].x - 0.5).abs() < 1e-6);
+    }
+
+    #[test]
+    fn colours() {
+        assert_eq!(colormap(0.0), [68, 1, 84]);
+        assert_eq!(colormap(1.0), [253, 231, 37]);
+        let c = false_colour(&[1e-6, 1e-3, 1.0], 1e-6, 1.0);
+        assert_eq!(c[0], colormap(0.0));
+        assert_eq!(c[1], colormap(0.5));
+        assert_eq!(c[2], colormap(1.0));
+    }
+}

@@ -1,0 +1,13 @@
+//! Analysis: how much each technique reduces the error of an image. Knows nothing of how images
+//! are made beyond Films, EXR files and the renderer's public entry points.
+//!
+//! - [`metrics`]: MSE, relMSE, RMSE, MAE, variance across runs, bias tests, error maps;
+//! - [`experiments`]: `compare` (strategies at equal spp or equal time, over K runs) and
+//!   `converge` (error against spp, each spp rendered from scratch, with fitted slopes);
+//! - [`merge`]: renders made in pieces combined exactly into one reference;
+//! - [`plots`]: log-log convergence plots (SVG/PNG) and labelled image grids (PNG).
+
+pub mod experiments;
+pub mod merge;
+pub mod metrics;
+pub mod plots;
