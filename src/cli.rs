@@ -171,7 +171,10 @@ fn strategy_list(s: &str) -> std::result::Result<StrategyList, String> {
     if s.trim() == "all" {
         return Ok(StrategyList(StrategySpec::all_pairs()));
     }
-    s.split(',').map(StrategySpec::parse).collect::<std::result::Result<_, _>>().map(StrategyList)
+    s.split(',')
+        .map(StrategySpec::parse)
+        .collect::<std::result::Result<_, _>>()
+        .map(StrategyList)
 }
 
 fn spp_list(s: &str) -> std::result::Result<SppList, String> {
@@ -442,12 +445,26 @@ fn run_render(args: &RenderArgs) -> Result<()> {
             Some(&film.variance_image()),
             &meta,
         )?,
-        Format::Png => write_image(&output, film.width, film.height, &mean, &meta, args.exposure)?,
+        Format::Png => write_image(
+            &output,
+            film.width,
+            film.height,
+            &mean,
+            &meta,
+            args.exposure,
+        )?,
     }
     if let Some(v) = &args.variance {
         let mut vmeta = meta.clone();
         vmeta.insert("image".into(), "variance of the mean".into());
-        write_exr(v, film.width, film.height, &film.variance_image(), None, &vmeta)?;
+        write_exr(
+            v,
+            film.width,
+            film.height,
+            &film.variance_image(),
+            None,
+            &vmeta,
+        )?;
     }
     if stats.nonfinite > 0 {
         warn(&format!(
@@ -512,7 +529,11 @@ fn run_merge(args: &MergeArgs) -> Result<()> {
         .iter()
         .map(|p| read_exr(p))
         .collect::<Result<Vec<_>>>()?;
-    let names: Vec<String> = args.inputs.iter().map(|p| p.display().to_string()).collect();
+    let names: Vec<String> = args
+        .inputs
+        .iter()
+        .map(|p| p.display().to_string())
+        .collect();
     let m = merge(&images, &names)?;
     write_exr(
         &args.output,
@@ -555,7 +576,8 @@ fn run_diff(args: &DiffArgs) -> Result<()> {
     println!("MAE                {:.6e}", m.mae);
     println!("mean signed error  {:+.6e}", m.mean_signed_error);
     if let Some(v) = &a.variance {
-        let mean_var = v.iter().map(|p| (p.x + p.y + p.z) as f64).sum::<f64>() / (3 * v.len()) as f64;
+        let mean_var =
+            v.iter().map(|p| (p.x + p.y + p.z) as f64).sum::<f64>() / (3 * v.len()) as f64;
         println!("variance of mean   {mean_var:.6e}");
         let z = bias_z_scores(&a.pixels, v, &r.pixels, r.variance.as_deref());
         let (mut sum_d, mut sum_v, mut max_z) = (0.0f64, 0.0f64, 0.0f64);
@@ -582,7 +604,10 @@ fn run_diff(args: &DiffArgs) -> Result<()> {
             })
             .collect();
         write_image(p, a.width, a.height, &colours, &BTreeMap::new(), 0.0)?;
-        eprintln!("wrote {} (relative squared error, log scale {lo:.1e}..{hi:.1e})", p.display());
+        eprintln!(
+            "wrote {} (relative squared error, log scale {lo:.1e}..{hi:.1e})",
+            p.display()
+        );
     }
     Ok(())
 }
@@ -604,7 +629,10 @@ fn experiment_setup(a: &ExperimentArgs) -> Result<(Scene, RgbImage, ExperimentSe
     let reference = load_reference(&a.reference)?;
     let max_depth = match reference.metadata.get("max_depth") {
         Some(d) => d.parse().map_err(|_| {
-            Error::Settings(format!("{}: max_depth '{d}' is not a number", a.reference.display()))
+            Error::Settings(format!(
+                "{}: max_depth '{d}' is not a number",
+                a.reference.display()
+            ))
         })?,
         None => scene.defaults.max_depth.unwrap_or(DEFAULT_MAX_DEPTH),
     };
@@ -638,7 +666,9 @@ fn check_output_any(path: &Path) -> Result<()> {
 fn write_text(path: &Path, text: &str) -> Result<()> {
     let tmp = path.with_file_name(format!(
         ".{}.{}.tmp",
-        path.file_name().map(|n| n.to_string_lossy()).unwrap_or_default(),
+        path.file_name()
+            .map(|n| n.to_string_lossy())
+            .unwrap_or_default(),
         std::process::id()
     ));
     std::fs::write(&tmp, text)
@@ -660,7 +690,16 @@ fn json<T: serde::Serialize>(v: &T) -> String {
 pub fn compare_table(c: &Comparison) -> String {
     let mut s = format!(
         "{:<22} {:>7} {:>9} {:>11} {:>11} {:>11} {:>8} {:>8} {:>10} {:>10}\n",
-        "strategy", "spp", "time s", "MSE", "relMSE", "variance", "bias t", "bias p", "MSE red.", "efficiency"
+        "strategy",
+        "spp",
+        "time s",
+        "MSE",
+        "relMSE",
+        "variance",
+        "bias t",
+        "bias p",
+        "MSE red.",
+        "efficiency"
     );
     for r in &c.rows {
         s += &format!(
@@ -712,8 +751,19 @@ fn run_compare(args: &CompareArgs) -> Result<()> {
         for r in &c.rows {
             t += &format!(
                 "{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
-                r.strategy, r.runs, r.spp, r.seconds, r.mse, r.rel_mse, r.rmse, r.mae, r.variance,
-                r.bias_t, r.bias_p, r.mse_reduction, r.efficiency
+                r.strategy,
+                r.runs,
+                r.spp,
+                r.seconds,
+                r.mse,
+                r.rel_mse,
+                r.rmse,
+                r.mae,
+                r.variance,
+                r.bias_t,
+                r.bias_p,
+                r.mse_reduction,
+                r.efficiency
             );
         }
         write_text(p, &t)?;
@@ -738,14 +788,24 @@ fn run_compare(args: &CompareArgs) -> Result<()> {
                 error: m,
             })
             .collect();
-        write_image_grid(p, s.width, s.height, &rows, args.exposure, "rel. error² (log)")?;
+        write_image_grid(
+            p,
+            s.width,
+            s.height,
+            &rows,
+            args.exposure,
+            "rel. error² (log)",
+        )?;
     }
     Ok(())
 }
 
 /// The sweep as a table of points and slopes (what `vrpt converge` prints).
 pub fn converge_table(c: &Convergence) -> String {
-    let mut s = format!("{:<22} {:>7} {:>11} {:>11} {:>9}\n", "strategy", "spp", "MSE", "relMSE", "time s");
+    let mut s = format!(
+        "{:<22} {:>7} {:>11} {:>11} {:>9}\n",
+        "strategy", "spp", "MSE", "relMSE", "time s"
+    );
     for p in &c.points {
         s += &format!(
             "{:<22} {:>7} {:>11.4e} {:>11.4e} {:>9.3}\n",
@@ -780,9 +840,12 @@ fn run_converge(args: &ConvergeArgs) -> Result<()> {
     }
     let spps = &args.spp.0;
     if spps.len() < 2 {
-        return Err(Error::Settings("--spp needs at least two sample counts".into()));
+        return Err(Error::Settings(
+            "--spp needs at least two sample counts".into(),
+        ));
     }
-    let total = a.strategies.0.len() as u64 * a.runs as u64 * spps.iter().map(|&x| x as u64).sum::<u64>();
+    let total =
+        a.strategies.0.len() as u64 * a.runs as u64 * spps.iter().map(|&x| x as u64).sum::<u64>();
     let bar = experiment_bar(a.quiet, total);
     let progress: &dyn ExperimentProgress = match &bar {
         Some(b) => b,
@@ -796,7 +859,10 @@ fn run_converge(args: &ConvergeArgs) -> Result<()> {
     if let Some(p) = &a.csv {
         let mut t = String::from("strategy,spp,mse,rel_mse,seconds\n");
         for q in &c.points {
-            t += &format!("{},{},{},{},{}\n", q.strategy, q.spp, q.mse, q.rel_mse, q.seconds);
+            t += &format!(
+                "{},{},{},{},{}\n",
+                q.strategy, q.spp, q.mse, q.rel_mse, q.seconds
+            );
         }
         write_text(p, &t)?;
     }

@@ -229,7 +229,10 @@ pub fn read_exr(path: &Path) -> Result<RgbImage> {
         .optional("variance.B", f32::NAN)
         .collect_pixels(
             |res: exr_prelude::Vec2<usize>, _| -> Pixels {
-                (res.width(), vec![(0.0, 0.0, 0.0, 0.0, 0.0, 0.0); res.width() * res.height()])
+                (
+                    res.width(),
+                    vec![(0.0, 0.0, 0.0, 0.0, 0.0, 0.0); res.width() * res.height()],
+                )
             },
             |px: &mut Pixels, p: exr_prelude::Vec2<usize>, v: Px| {
                 px.1[p.y() * px.0 + p.x()] = v;

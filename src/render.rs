@@ -158,7 +158,10 @@ pub fn render_passes(
     plan: &PassPlan,
     progress: &dyn Progress,
 ) -> Result<(Film, RenderStats, u32)> {
-    let pass = plan.pass_spp.unwrap_or(settings.spp).clamp(1, settings.spp.max(1));
+    let pass = plan
+        .pass_spp
+        .unwrap_or(settings.spp)
+        .clamp(1, settings.spp.max(1));
     let start = Instant::now();
     let mut film = Film::new(settings.width, settings.height);
     let mut stats = RenderStats::default();

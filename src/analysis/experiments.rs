@@ -54,9 +54,8 @@ impl StrategySpec {
         })?;
         let sampler = SamplerKind::from_name(a.trim())
             .ok_or_else(|| format!("unknown sampler '{a}' in '{s}' (independent, stratified)"))?;
-        let directions = Directions::from_name(b.trim()).ok_or_else(|| {
-            format!("unknown directions '{b}' in '{s}' (uniform, cosine, phong)")
-        })?;
+        let directions = Directions::from_name(b.trim())
+            .ok_or_else(|| format!("unknown directions '{b}' in '{s}' (uniform, cosine, phong)"))?;
         Ok(StrategySpec {
             sampler,
             directions,
@@ -209,6 +208,7 @@ pub fn compare(
             "compare needs at least one strategy, 2 runs and 1 spp".into(),
         ));
     }
+    warm_up(scene, s)?;
     let mut rows = Vec::new();
     let mut images = Vec::new();
     for st in strategies {
@@ -218,7 +218,11 @@ pub fn compare(
             let settings = RenderSettings {
                 width: s.width,
                 height: s.height,
-                spp: if equal_time.is_some() { u32::MAX / 2 } else { spp },
+                spp: if equal_time.is_some() {
+                    u32::MAX / 2
+                } else {
+                    spp
+                },
                 first_sample: 0,
                 max_depth: s.max_depth,
                 seed: s.seed + k as u64,
@@ -265,16 +269,32 @@ pub fn compare(
         r.mse_reduction = base_mse / r.mse;
         r.efficiency = (base_mse * base_t) / (r.mse * r.seconds);
     }
-    let reference_variance = reference
-        .variance
-        .as_ref()
-        .map(|v| v.iter().map(|p| (p.x + p.y + p.z) as f64 / 3.0).sum::<f64>() / v.len() as f64);
+    let reference_variance = reference.variance.as_ref().map(|v| {
+        v.iter()
+            .map(|p| (p.x + p.y + p.z) as f64 / 3.0)
+            .sum::<f64>()
+            / v.len() as f64
+    });
     Ok(Comparison {
         baseline: rows[base].strategy.clone(),
         rows,
         images,
         reference_variance,
     })
+}
+
+/// One small untimed render, so the first timed run does not pay for starting the thread pool
+/// and warming the caches.
+fn warm_up(scene: &Scene, s: &ExperimentSettings) -> Result<()> {
+    let settings = RenderSettings {
+        width: s.width.min(16),
+        height: s.height.min(16),
+        spp: 1,
+        max_depth: s.max_depth,
+        threads: s.threads,
+        ..RenderSettings::default()
+    };
+    render_passes(scene, &settings, &PassPlan::default(), &NoProgress).map(|_| ())
 }
 
 /// One point of a convergence sweep.
@@ -314,6 +334,7 @@ pub fn converge(
     progress: &dyn ExperimentProgress,
 ) -> Result<Convergence> {
     check_reference(scene, reference, s)?;
+    warm_up(scene, s)?;
     if strategies.is_empty() || spps.len() < 2 || s.runs < 1 || spps.contains(&0) {
         return Err(Error::Settings(
             "converge needs at least one strategy, two spp values ≥ 1 and one run".into(),

@@ -32,7 +32,10 @@ pub fn merge(inputs: &[RgbImage], names: &[String]) -> Result<RgbImage> {
     for (i, img) in inputs.iter().enumerate() {
         for key in MUST_MATCH.iter().chain(["spp", "seed"].iter()) {
             if !img.metadata.contains_key(*key) {
-                return Err(bad(i, format!("no '{key}' in its metadata: not a vrpt render")));
+                return Err(bad(
+                    i,
+                    format!("no '{key}' in its metadata: not a vrpt render"),
+                ));
             }
         }
         for key in MUST_MATCH {
@@ -56,7 +59,10 @@ pub fn merge(inputs: &[RgbImage], names: &[String]) -> Result<RgbImage> {
             .map_err(|_| bad(i, "first_sample is not a number".into()))?;
         let seed = img.metadata["seed"].clone();
         if seed == "merged" {
-            return Err(bad(i, "is itself a merge; merge the original renders".into()));
+            return Err(bad(
+                i,
+                "is itself a merge; merge the original renders".into(),
+            ));
         }
         if let Some((_, a, b)) = ranges
             .iter()

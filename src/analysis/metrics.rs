@@ -161,7 +161,11 @@ pub fn colormap(t: f64) -> [u8; 3] {
         [94.0, 201.0, 98.0],
         [253.0, 231.0, 37.0],
     ];
-    let t = if t.is_finite() { t.clamp(0.0, 1.0) } else { 1.0 } * 4.0;
+    let t = if t.is_finite() {
+        t.clamp(0.0, 1.0)
+    } else {
+        1.0
+    } * 4.0;
     let i = (t as usize).min(3);
     let f = t - i as f64;
     std::array::from_fn(|c| (STOPS[i][c] + f * (STOPS[i + 1][c] - STOPS[i][c])).round() as u8)
@@ -201,16 +205,29 @@ mod tests {
     #[test]
     fn variance_and_bias_over_runs() {
         let r = vec![Vec3::ZERO; 2];
-        let runs = vec![vec![Vec3::splat(1.0); 2], vec![Vec3::splat(-1.0); 2], vec![Vec3::splat(3.0); 2]];
+        let runs = vec![
+            vec![Vec3::splat(1.0); 2],
+            vec![Vec3::splat(-1.0); 2],
+            vec![Vec3::splat(3.0); 2],
+        ];
         // per value: mean 1, sample variance ((0)² + (−2)² + 2²)/2 = 4
         assert!((variance_across_runs(&runs) - 4.0).abs() < 1e-12);
         // e = 1, −1, 3: mean 1, sd 2, t = 1/(2/√3) = 0.866
         let b = bias_test(&runs, &r);
         assert!((b.t - 3f64.sqrt() / 2.0).abs() < 1e-12);
         assert!(b.p > 0.4 && b.p < 0.6);
-        let biased = vec![vec![Vec3::splat(1.0); 2], vec![Vec3::splat(1.01); 2], vec![Vec3::splat(0.99); 2]];
+        let biased = vec![
+            vec![Vec3::splat(1.0); 2],
+            vec![Vec3::splat(1.01); 2],
+            vec![Vec3::splat(0.99); 2],
+        ];
         assert!(bias_test(&biased, &r).p < 1e-3);
-        let z = bias_z_scores(&[Vec3::splat(2.0)], &[Vec3::splat(3.0)], &[Vec3::ONE], Some(&[Vec3::ONE]));
+        let z = bias_z_scores(
+            &[Vec3::splat(2.0)],
+            &[Vec3::splat(3.0)],
+            &[Vec3::ONE],
+            Some(&[Vec3::ONE]),
+        );
         assert!((z[0].x - 0.5).abs() < 1e-6);
     }
 

@@ -55,7 +55,11 @@ fn draw_convergence<DB: DrawingBackend>(
     let ys = c.points.iter().map(|p| p.mse).filter(|y| *y > 0.0);
     let (x0, x1) = xs.fold((f64::MAX, f64::MIN), |(a, b), x| (a.min(x), b.max(x)));
     let (y0, y1) = ys.fold((f64::MAX, f64::MIN), |(a, b), y| (a.min(y), b.max(y)));
-    let (y0, y1) = if y0 <= y1 { (y0 / 2.0, y1 * 2.0) } else { (1e-6, 1.0) };
+    let (y0, y1) = if y0 <= y1 {
+        (y0 / 2.0, y1 * 2.0)
+    } else {
+        (1e-6, 1.0)
+    };
     let mut chart = ChartBuilder::on(&root)
         .caption(title, (FONT, 20))
         .margin(15)
@@ -84,7 +88,9 @@ fn draw_convergence<DB: DrawingBackend>(
             .draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))
             .map_err(e)?
             .label(format!("{} (slope {:.2})", s.strategy, s.mse_slope))
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+            });
         chart
             .draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled())))
             .map_err(e)?;
@@ -109,8 +115,12 @@ pub fn write_convergence_plot(path: &Path, c: &Convergence, title: &str) -> Resu
         .is_some_and(|e| e.eq_ignore_ascii_case("svg"));
     if is_svg {
         let mut svg = String::new();
-        draw_convergence(SVGBackend::with_string(&mut svg, size).into_drawing_area(), c, title)
-            .map_err(|m| draw_err(path, m))?;
+        draw_convergence(
+            SVGBackend::with_string(&mut svg, size).into_drawing_area(),
+            c,
+            title,
+        )
+        .map_err(|m| draw_err(path, m))?;
         write_bytes(path, svg.as_bytes())
     } else {
         Format::from_path(path)?;
@@ -129,7 +139,9 @@ pub fn write_convergence_plot(path: &Path, c: &Convergence, title: &str) -> Resu
 fn write_bytes(path: &Path, bytes: &[u8]) -> Result<()> {
     let tmp = path.with_file_name(format!(
         ".{}.{}.tmp",
-        path.file_name().map(|n| n.to_string_lossy()).unwrap_or_default(),
+        path.file_name()
+            .map(|n| n.to_string_lossy())
+            .unwrap_or_default(),
         std::process::id()
     ));
     std::fs::write(&tmp, bytes)
@@ -211,13 +223,25 @@ pub fn write_image_grid(
         let root = BitMapBackend::with_buffer(&mut buf, (gw, gh)).into_drawing_area();
         let style = (FONT, 15).into_font().color(&BLACK);
         let text = |s: &str, x: u32, y: u32| {
-            root.draw(&Text::new(s.to_string(), (x as i32, y as i32), style.clone()))
-                .map_err(|e| draw_err(path, e))
+            root.draw(&Text::new(
+                s.to_string(),
+                (x as i32, y as i32),
+                style.clone(),
+            ))
+            .map_err(|e| draw_err(path, e))
         };
         text("image", pad, 6)?;
-        text(&format!("{error_title} {lo:.0e}..{hi:.0e}"), 2 * pad + cw, 6)?;
+        text(
+            &format!("{error_title} {lo:.0e}..{hi:.0e}"),
+            2 * pad + cw,
+            6,
+        )?;
         for (i, r) in rows.iter().enumerate() {
-            text(&r.label, pad, header_h + i as u32 * (label_h + ch + pad) + 3)?;
+            text(
+                &r.label,
+                pad,
+                header_h + i as u32 * (label_h + ch + pad) + 3,
+            )?;
         }
         root.present().map_err(|e| draw_err(path, e))?;
     }

@@ -13,14 +13,16 @@ pub fn cornell_path() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-box")
 }
 
+/// The folder of a shipped scene.
+pub fn shipped_path(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenes")
+        .join(name)
+}
+
 /// Load a shipped scene by folder name.
 pub fn shipped(name: &str) -> Scene {
-    vrpt::scene::load(
-        &Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("scenes")
-            .join(name),
-    )
-    .unwrap()
+    vrpt::scene::load(&shipped_path(name)).unwrap()
 }
 
 /// Write `text` to `dir/name` and return the path.
