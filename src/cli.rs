@@ -130,7 +130,7 @@ pub struct RenderArgs {
     pub first_sample: u32,
     /// Stop at the end of the first whole pass that finishes after this many seconds (the spp
     /// reached is printed and recorded); --spp is then the most it renders.
-    #[arg(long, value_name = "SECONDS", value_parser = positive_seconds)]
+    #[arg(long, value_name = "SECONDS", value_parser = positive_seconds, allow_negative_numbers = true)]
     pub time_limit: Option<f64>,
     /// Samples per pixel per pass, the unit of stratification (default: all of --spp in one
     /// pass, or 16 with --time-limit).
@@ -253,7 +253,7 @@ pub struct CompareArgs {
     pub spp: u32,
     /// Give each run of each strategy this many seconds instead of a fixed spp (whole passes
     /// of --spp samples).
-    #[arg(long, value_name = "SECONDS", value_parser = positive_seconds)]
+    #[arg(long, value_name = "SECONDS", value_parser = positive_seconds, allow_negative_numbers = true)]
     pub equal_time: Option<f64>,
     /// Write a PNG grid: per strategy its first run's image and error map.
     #[arg(long, value_name = "PNG")]

@@ -9,6 +9,7 @@
 //! emitter gets a uniform white environment (radiance 1) so any OBJ renders visibly.
 
 pub mod description;
+pub mod generate;
 pub mod obj;
 
 use crate::accel::{Accel, Hit};
