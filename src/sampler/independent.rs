@@ -25,7 +25,8 @@ impl IndependentSampler {
 
     #[inline]
     fn next_hash(&mut self) -> u64 {
-        let h = mix64(self.key ^ mix64(self.dim.wrapping_add(0x632b_e59b_d9b4_e019)));
+        // the key is already a full-avalanche hash: one more mix per dimension suffices
+        let h = mix64(self.key ^ self.dim.wrapping_mul(0x632b_e59b_d9b4_e019));
         self.dim += 1;
         h
     }

@@ -29,17 +29,28 @@ pub fn grid_shape(n: u32) -> (u32, u32) {
 /// "Correlated multi-jittered sampling": a keyed bijection on the next power of two, with cycle
 /// walking back into `0..n`).
 #[inline]
-pub fn permute_index(mut i: u32, n: u32, key: u32) -> u32 {
+pub fn permute_index(i: u32, n: u32, key: u32) -> u32 {
     if n <= 1 {
         return 0;
     }
-    let p = key;
-    let mut w = n - 1;
+    permute_with(i, &FastDiv::new(n), mask_of(n), key)
+}
+
+/// The smallest `2^k − 1 ≥ n − 1`.
+fn mask_of(n: u32) -> u32 {
+    let mut w = n.max(1) - 1;
     w |= w >> 1;
     w |= w >> 2;
     w |= w >> 4;
     w |= w >> 8;
     w |= w >> 16;
+    w
+}
+
+/// [`permute_index`] with the divisor and mask of `n` precomputed (n ≥ 2).
+#[inline]
+fn permute_with(mut i: u32, n: &FastDiv, w: u32, key: u32) -> u32 {
+    let p = key;
     loop {
         i ^= p;
         i = i.wrapping_mul(0xe170_893d);
@@ -59,11 +70,50 @@ pub fn permute_index(mut i: u32, n: u32, key: u32) -> u32 {
         i = i.wrapping_mul(0xc860_a3df);
         i &= w;
         i ^= i >> 5;
-        if i < n {
+        if i < n.d {
             break;
         }
     }
-    ((i as u64 + p as u64) % n as u64) as u32
+    // (i + p) mod n without overflow: i < n, so add p mod n and subtract n once if needed
+    let r = i + n.rem(p);
+    if r >= n.d {
+        r - n.d
+    } else {
+        r
+    }
+}
+
+/// Division and remainder by a fixed `d` with one multiplication each (Lemire, Kaser & Kurz
+/// 2019, "Faster remainder by direct computation"): `m = ⌊(2⁶⁴ − 1)/d⌋ + 1`, then
+/// `a / d = ⌊m·a / 2⁶⁴⌋` and `a mod d = ⌊(m·a mod 2⁶⁴)·d / 2⁶⁴⌋`, exact for all 32-bit `a`.
+#[derive(Clone, Copy, Debug)]
+struct FastDiv {
+    d: u32,
+    m: u64,
+}
+
+impl FastDiv {
+    fn new(d: u32) -> Self {
+        let d = d.max(1);
+        FastDiv {
+            d,
+            m: (u64::MAX / d as u64).wrapping_add(1),
+        }
+    }
+
+    #[inline]
+    fn div(&self, a: u32) -> u32 {
+        if self.d == 1 {
+            return a;
+        }
+        ((self.m as u128 * a as u128) >> 64) as u32
+    }
+
+    #[inline]
+    fn rem(&self, a: u32) -> u32 {
+        let low = self.m.wrapping_mul(a as u64);
+        ((low as u128 * self.d as u128) >> 64) as u32
+    }
 }
 
 /// Jittered strata per dimension, N samples per pixel per pass.
@@ -72,6 +122,11 @@ pub struct StratifiedSampler {
     seed: u64,
     n: u32,
     grid: (u32, u32),
+    /// Division by N and by the grid width, the permutation mask, and 1/N, 1/a, 1/b.
+    div_n: FastDiv,
+    div_a: FastDiv,
+    mask: u32,
+    inv: (f32, f32, f32),
     /// Key of the current (pixel, pass, N).
     key: u64,
     /// Index of the current sample within its pass.
@@ -83,31 +138,41 @@ impl StratifiedSampler {
     /// A sampler for `samples_per_pass` samples per pixel per pass (normally the spp).
     pub fn new(seed: u64, samples_per_pass: u32) -> Self {
         let n = samples_per_pass.max(1);
+        let (a, b) = grid_shape(n);
         StratifiedSampler {
             seed,
             n,
-            grid: grid_shape(n),
+            grid: (a, b),
+            div_n: FastDiv::new(n),
+            div_a: FastDiv::new(a),
+            mask: mask_of(n),
+            inv: (1.0 / n as f32, 1.0 / a as f32, 1.0 / b as f32),
             key: 0,
             j: 0,
             dim: 0,
         }
     }
 
-    /// (permutation key, jitter hash) of the next dimension.
+    /// (stratum of the current sample, jitter hash) in the next dimension.
     #[inline]
-    fn next_keys(&mut self) -> (u32, u64) {
-        let dk = mix64(self.key ^ mix64(self.dim.wrapping_add(0xd6e8_feb8_6659_fd93)));
+    fn next_stratum(&mut self) -> (u32, u64) {
+        let dk = mix64(self.key ^ self.dim.wrapping_mul(0xd6e8_feb8_6659_fd93));
         self.dim += 1;
         let jitter = mix64(dk ^ (self.j as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15));
-        (dk as u32, jitter)
+        let s = if self.n > 1 {
+            permute_with(self.j, &self.div_n, self.mask, dk as u32)
+        } else {
+            0
+        };
+        (s, jitter)
     }
 }
 
 impl Sampler for StratifiedSampler {
     #[inline]
     fn start_pixel_sample(&mut self, pixel: UVec2, index: u32) {
-        let pass = index / self.n;
-        self.j = index % self.n;
+        let pass = self.div_n.div(index);
+        self.j = index - pass * self.n;
         self.key = hash_words(&[
             self.seed ^ 0x5354_5241_5449_4649, // "STRATIFI": other streams than independent
             ((pixel.x as u64) << 32) | pixel.y as u64,
@@ -118,20 +183,18 @@ impl Sampler for StratifiedSampler {
 
     #[inline]
     fn next_1d(&mut self) -> f32 {
-        let (pk, h) = self.next_keys();
-        let s = permute_index(self.j, self.n, pk);
-        ((s as f32 + u64_to_unit_f32(h)) / self.n as f32).min(ONE_MINUS_EPSILON)
+        let (s, h) = self.next_stratum();
+        ((s as f32 + u64_to_unit_f32(h)) * self.inv.0).min(ONE_MINUS_EPSILON)
     }
 
     #[inline]
     fn next_2d(&mut self) -> Vec2 {
-        let (pk, h) = self.next_keys();
-        let s = permute_index(self.j, self.n, pk);
-        let (a, b) = self.grid;
-        let (sx, sy) = (s % a, s / a);
+        let (s, h) = self.next_stratum();
+        let sy = self.div_a.div(s);
+        let sx = s - sy * self.grid.0;
         Vec2::new(
-            ((sx as f32 + u64_to_unit_f32(h)) / a as f32).min(ONE_MINUS_EPSILON),
-            ((sy as f32 + u64_to_unit_f32(h << 24)) / b as f32).min(ONE_MINUS_EPSILON),
+            ((sx as f32 + u64_to_unit_f32(h)) * self.inv.1).min(ONE_MINUS_EPSILON),
+            ((sy as f32 + u64_to_unit_f32(h << 24)) * self.inv.2).min(ONE_MINUS_EPSILON),
         )
     }
 }
@@ -147,6 +210,17 @@ mod tests {
         assert_eq!(grid_shape(7), (1, 7));
         assert_eq!(grid_shape(1), (1, 1));
         assert_eq!(grid_shape(4096), (64, 64));
+    }
+
+    #[test]
+    fn fast_division_is_exact() {
+        for d in [1u32, 2, 3, 7, 16, 17, 100, 4096, 65535, 1 << 20, u32::MAX] {
+            let f = FastDiv::new(d);
+            for a in [0u32, 1, 2, 5, 99, 4095, 4096, 65536, 1 << 31, u32::MAX - 1, u32::MAX] {
+                assert_eq!(f.div(a), a / d, "{a}/{d}");
+                assert_eq!(f.rem(a), a % d, "{a}%{d}");
+            }
+        }
     }
 
     #[test]
