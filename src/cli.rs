@@ -481,7 +481,7 @@ fn run_render(args: &RenderArgs) -> Result<()> {
             scene.accel.memory_bytes() as f64 / 1024.0
         );
         eprintln!(
-            "rendered {}x{} at {} spp ({} + {}, max depth {}) in {:.3} s: {:.3} M samples/s, {} rays, {:.2} Mrays/s",
+            "rendered {}x{} at {} spp ({} + {}, max depth {}) in {:.3} s: {:.3} M samples/s, {:.2} Mrays/s",
             settings.width,
             settings.height,
             settings.spp,
@@ -490,8 +490,14 @@ fn run_render(args: &RenderArgs) -> Result<()> {
             settings.max_depth,
             stats.elapsed.as_secs_f64(),
             stats.samples_per_second() / 1e6,
-            stats.rays,
             stats.mrays_per_second()
+        );
+        eprintln!(
+            "rays: {} ({} camera, {} bounce; {:.2} per sample)",
+            stats.rays,
+            stats.samples,
+            stats.rays - stats.samples,
+            stats.rays as f64 / stats.samples.max(1) as f64
         );
         eprintln!("wrote {}", output.display());
     }

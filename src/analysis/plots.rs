@@ -100,7 +100,7 @@ fn draw_convergence<DB: DrawingBackend>(
         .label_font((FONT, 14))
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
-        .position(SeriesLabelPosition::UpperRight)
+        .position(SeriesLabelPosition::LowerLeft)
         .draw()
         .map_err(e)?;
     root.present().map_err(e)

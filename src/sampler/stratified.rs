@@ -216,7 +216,19 @@ mod tests {
     fn fast_division_is_exact() {
         for d in [1u32, 2, 3, 7, 16, 17, 100, 4096, 65535, 1 << 20, u32::MAX] {
             let f = FastDiv::new(d);
-            for a in [0u32, 1, 2, 5, 99, 4095, 4096, 65536, 1 << 31, u32::MAX - 1, u32::MAX] {
+            for a in [
+                0u32,
+                1,
+                2,
+                5,
+                99,
+                4095,
+                4096,
+                65536,
+                1 << 31,
+                u32::MAX - 1,
+                u32::MAX,
+            ] {
                 assert_eq!(f.div(a), a / d, "{a}/{d}");
                 assert_eq!(f.rem(a), a % d, "{a}%{d}");
             }
