@@ -670,22 +670,7 @@ fn check_output_any(path: &Path) -> Result<()> {
 }
 
 fn write_text(path: &Path, text: &str) -> Result<()> {
-    let tmp = path.with_file_name(format!(
-        ".{}.{}.tmp",
-        path.file_name()
-            .map(|n| n.to_string_lossy())
-            .unwrap_or_default(),
-        std::process::id()
-    ));
-    std::fs::write(&tmp, text)
-        .and_then(|_| std::fs::rename(&tmp, path))
-        .map_err(|e| {
-            let _ = std::fs::remove_file(&tmp);
-            Error::Write {
-                path: path.to_path_buf(),
-                message: e.to_string(),
-            }
-        })
+    crate::image_io::write_bytes(path, text.as_bytes())
 }
 
 fn json<T: serde::Serialize>(v: &T) -> String {

@@ -87,8 +87,9 @@ fn temp_path(path: &Path) -> PathBuf {
     path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
 }
 
-/// Write with `write` to a temporary file, then rename it over `path`.
-fn write_atomically(
+/// Write with `write` to a temporary file beside `path`, then rename it over `path`: an
+/// interrupted or failed write leaves any older file intact.
+pub fn write_atomically(
     path: &Path,
     write: impl FnOnce(&Path) -> std::result::Result<(), String>,
 ) -> Result<()> {
@@ -190,6 +191,13 @@ pub fn write_png(
             image::ImageFormat::Png,
         )
         .map_err(|e| e.to_string())
+    })
+}
+
+/// Write `bytes` to `path` through a temporary file (see [`write_atomically`]).
+pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<()> {
+    write_atomically(path, |tmp| {
+        std::fs::write(tmp, bytes).map_err(|e| e.to_string())
     })
 }
 

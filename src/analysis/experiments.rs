@@ -215,21 +215,12 @@ pub fn compare(
         let mut runs: Vec<Vec<Vec3>> = Vec::new();
         let (mut secs, mut spps, mut ms) = (Vec::new(), Vec::new(), Vec::<Metrics>::new());
         for k in 0..s.runs {
-            let settings = RenderSettings {
-                width: s.width,
-                height: s.height,
-                spp: if equal_time.is_some() {
-                    u32::MAX / 2
-                } else {
-                    spp
-                },
-                first_sample: 0,
-                max_depth: s.max_depth,
-                seed: s.seed + k as u64,
-                sampler: st.sampler,
-                directions: st.directions,
-                threads: s.threads,
+            let max_spp = if equal_time.is_some() {
+                u32::MAX / 2
+            } else {
+                spp
             };
+            let settings = run_settings(st, s, max_spp, k);
             let plan = PassPlan {
                 pass_spp: Some(spp),
                 time_limit: equal_time,
@@ -281,6 +272,21 @@ pub fn compare(
         images,
         reference_variance,
     })
+}
+
+/// The render settings of run `k` of strategy `st`.
+fn run_settings(st: &StrategySpec, s: &ExperimentSettings, spp: u32, k: u32) -> RenderSettings {
+    RenderSettings {
+        width: s.width,
+        height: s.height,
+        spp,
+        first_sample: 0,
+        max_depth: s.max_depth,
+        seed: s.seed + k as u64,
+        sampler: st.sampler,
+        directions: st.directions,
+        threads: s.threads,
+    }
 }
 
 /// One small untimed render, so the first timed run does not pay for starting the thread pool
@@ -348,17 +354,7 @@ pub fn converge(
         for &spp in spps {
             let (mut mse, mut rel, mut secs) = (0.0, 0.0, 0.0);
             for k in 0..s.runs {
-                let settings = RenderSettings {
-                    width: s.width,
-                    height: s.height,
-                    spp,
-                    first_sample: 0,
-                    max_depth: s.max_depth,
-                    seed: s.seed + k as u64,
-                    sampler: st.sampler,
-                    directions: st.directions,
-                    threads: s.threads,
-                };
+                let settings = run_settings(st, s, spp, k);
                 let (film, stats, _) =
                     render_passes(scene, &settings, &PassPlan::default(), &NoProgress)?;
                 let m = metrics(&film.mean_image(), &reference.pixels);

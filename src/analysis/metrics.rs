@@ -125,7 +125,7 @@ pub fn bias_test(runs: &[Vec<Vec3>], reference: &[Vec3]) -> BiasTest {
 }
 
 /// Per-pixel, per-channel bias z-scores `(m − r)/√(v_m + v_r)` (0 where both variances are 0
-/// and the values agree, ±∞ where they are 0 and the values differ).
+/// and the values agree to float rounding, ±∞ where they are 0 and the values differ).
 pub fn bias_z_scores(
     mean: &[Vec3],
     mean_variance: &[Vec3],
@@ -142,8 +142,8 @@ pub fn bias_z_scores(
             Vec3::from_array(std::array::from_fn(|c| {
                 if v[c] > 0.0 {
                     d[c] / v[c].sqrt()
-                } else if d[c] == 0.0 {
-                    0.0
+                } else if d[c].abs() <= 1e-6 * mean[i][c].abs().max(reference[i][c].abs()) {
+                    0.0 // no variance, equal up to float rounding
                 } else {
                     f32::INFINITY.copysign(d[c])
                 }

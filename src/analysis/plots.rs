@@ -6,7 +6,7 @@
 use crate::analysis::experiments::Convergence;
 use crate::analysis::metrics::false_colour;
 use crate::error::{Error, Result};
-use crate::image_io::{tonemap, Format};
+use crate::image_io::{tonemap, write_bytes, Format};
 use glam::Vec3;
 use plotters::prelude::*;
 use std::path::Path;
@@ -133,23 +133,6 @@ pub fn write_convergence_plot(path: &Path, c: &Convergence, title: &str) -> Resu
         .map_err(|m| draw_err(path, m))?;
         write_rgb_png(path, size.0, size.1, &buf)
     }
-}
-
-/// Write bytes to a temporary file beside `path`, then rename it over `path`.
-fn write_bytes(path: &Path, bytes: &[u8]) -> Result<()> {
-    let tmp = path.with_file_name(format!(
-        ".{}.{}.tmp",
-        path.file_name()
-            .map(|n| n.to_string_lossy())
-            .unwrap_or_default(),
-        std::process::id()
-    ));
-    std::fs::write(&tmp, bytes)
-        .and_then(|_| std::fs::rename(&tmp, path))
-        .map_err(|e| {
-            let _ = std::fs::remove_file(&tmp);
-            draw_err(path, e)
-        })
 }
 
 fn write_rgb_png(path: &Path, w: u32, h: u32, rgb: &[u8]) -> Result<()> {

@@ -74,15 +74,7 @@ pub struct RenderSection {
 impl Description {
     /// Read and parse `path`.
     pub fn load(path: &Path) -> Result<Description> {
-        let text = std::fs::read_to_string(path).map_err(|e| match e.kind() {
-            std::io::ErrorKind::NotFound => Error::NotFound {
-                path: path.to_path_buf(),
-            },
-            _ => Error::Read {
-                path: path.to_path_buf(),
-                source: e,
-            },
-        })?;
+        let text = crate::error::read_text(path)?;
         Self::parse(&text).map_err(|message| Error::Toml {
             path: path.to_path_buf(),
             message,

@@ -15,15 +15,7 @@ use std::path::{Path, PathBuf};
 
 /// Load `path` into a triangle soup, its materials and any warnings.
 pub fn load_obj(path: &Path) -> Result<(Mesh, Vec<Material>, Vec<String>)> {
-    let text = std::fs::read_to_string(path).map_err(|e| match e.kind() {
-        std::io::ErrorKind::NotFound => Error::NotFound {
-            path: path.to_path_buf(),
-        },
-        _ => Error::Read {
-            path: path.to_path_buf(),
-            source: e,
-        },
-    })?;
+    let text = crate::error::read_text(path)?;
     let mut warnings = Vec::new();
     let options = tobj::LoadOptions {
         triangulate: true,
