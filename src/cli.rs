@@ -9,7 +9,7 @@ use crate::analysis::merge::merge;
 use crate::analysis::metrics::{bias_z_scores, false_colour, metrics, relative_error_map};
 use crate::analysis::plots::{error_scale, write_convergence_plot, write_image_grid, GridRow};
 use crate::error::{Error, Result};
-use crate::image_io::{read_exr, write_exr, write_image, Format, RgbImage};
+use crate::image_io::{read_exr, write_exr, write_image, write_png_rgb8, Format, RgbImage};
 use crate::material::Directions;
 use crate::render::{
     render_passes, NoProgress, PassPlan, Progress, RenderSettings, RenderStats, Strategy,
@@ -353,25 +353,11 @@ fn default_output(scene_path: &Path) -> PathBuf {
     PathBuf::from(format!("{stem}.png"))
 }
 
-/// Check before a long render that `path` can be written (format and folder).
+/// Check before a long render that `path` can be written: a known image format, an existing
+/// folder.
 fn check_output(path: &Path) -> Result<()> {
     Format::from_path(path)?;
-    let dir = path.parent().filter(|d| !d.as_os_str().is_empty());
-    if let Some(dir) = dir {
-        if !dir.is_dir() {
-            return Err(Error::Write {
-                path: path.to_path_buf(),
-                message: format!("folder {} does not exist", dir.display()),
-            });
-        }
-    }
-    if path.is_dir() {
-        return Err(Error::Write {
-            path: path.to_path_buf(),
-            message: "is a folder".into(),
-        });
-    }
-    Ok(())
+    check_output_any(path)
 }
 
 fn run_render(args: &RenderArgs) -> Result<()> {
@@ -518,10 +504,6 @@ fn experiment_bar(quiet: bool, total: u64) -> Option<indicatif::ProgressBar> {
     Some(bar)
 }
 
-fn load_reference(path: &Path) -> Result<RgbImage> {
-    read_exr(path)
-}
-
 fn run_merge(args: &MergeArgs) -> Result<()> {
     check_output(&args.output)?;
     if Format::from_path(&args.output)? != Format::Exr {
@@ -602,14 +584,8 @@ fn run_diff(args: &DiffArgs) -> Result<()> {
     if let Some(p) = &args.error_map {
         let map = relative_error_map(&a.pixels, &r.pixels);
         let (lo, hi) = error_scale(&[&map]);
-        let colours: Vec<glam::Vec3> = false_colour(&map, lo, hi)
-            .iter()
-            .map(|c| {
-                // write_png applies the sRGB curve; invert it so the colours come out as given
-                glam::Vec3::from_array(c.map(|x| srgb_to_linear(x as f32 / 255.0)))
-            })
-            .collect();
-        write_image(p, a.width, a.height, &colours, &BTreeMap::new(), 0.0)?;
+        let rgb: Vec<u8> = false_colour(&map, lo, hi).into_iter().flatten().collect();
+        write_png_rgb8(p, a.width, a.height, &rgb)?;
         eprintln!(
             "wrote {} (relative squared error, log scale {lo:.1e}..{hi:.1e})",
             p.display()
@@ -618,21 +594,13 @@ fn run_diff(args: &DiffArgs) -> Result<()> {
     Ok(())
 }
 
-fn srgb_to_linear(v: f32) -> f32 {
-    if v <= 0.04045 {
-        v / 12.92
-    } else {
-        ((v + 0.055) / 1.055).powf(2.4)
-    }
-}
-
 /// Scene, reference and the settings both experiments share.
 fn experiment_setup(a: &ExperimentArgs) -> Result<(Scene, RgbImage, ExperimentSettings)> {
     let scene = scene::load(&a.scene)?;
     for w in &scene.warnings {
         warn(w);
     }
-    let reference = load_reference(&a.reference)?;
+    let reference = read_exr(&a.reference)?;
     let max_depth = match reference.metadata.get("max_depth") {
         Some(d) => d.parse().map_err(|_| {
             Error::Settings(format!(
@@ -657,14 +625,19 @@ fn experiment_setup(a: &ExperimentArgs) -> Result<(Scene, RgbImage, ExperimentSe
     Ok((scene, reference, s))
 }
 
-/// Like `check_output`, for files of any extension.
+/// Check that `path` can be written: its folder exists and it is not a folder.
 fn check_output_any(path: &Path) -> Result<()> {
-    let dir = path.parent().filter(|d| !d.as_os_str().is_empty());
-    if dir.is_some_and(|d| !d.is_dir()) || path.is_dir() {
-        return Err(Error::Write {
-            path: path.to_path_buf(),
-            message: "folder does not exist or the path is a folder".into(),
-        });
+    let err = |message: String| Error::Write {
+        path: path.to_path_buf(),
+        message,
+    };
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        if !dir.is_dir() {
+            return Err(err(format!("folder {} does not exist", dir.display())));
+        }
+    }
+    if path.is_dir() {
+        return Err(err("is a folder".into()));
     }
     Ok(())
 }

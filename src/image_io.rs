@@ -181,10 +181,16 @@ pub fn write_png(
 ) -> Result<()> {
     assert_eq!(pixels.len(), width as usize * height as usize);
     let bytes: Vec<u8> = pixels.iter().flat_map(|&v| tonemap(v, exposure)).collect();
+    write_png_rgb8(path, width, height, &bytes)
+}
+
+/// Write 8-bit RGB bytes (row-major, `width × height × 3`) as a PNG, as they are.
+pub fn write_png_rgb8(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<()> {
+    assert_eq!(rgb.len(), width as usize * height as usize * 3);
     write_atomically(path, |tmp| {
         image::save_buffer_with_format(
             tmp,
-            &bytes,
+            rgb,
             width,
             height,
             image::ExtendedColorType::Rgb8,

@@ -13,17 +13,21 @@
 //! stratified renders the sample variance over-estimates the variance of the mean, which only
 //! makes the test more lenient. z is approximately standard normal only where the mean is made
 //! of many samples: a pixel-channel is tested when the pilot's effective sample size (Kish,
-//! `(Σx)²/Σx²`, about the number of samples that carry the value) is at least 100, where the
-//! skewness of the mean is ≤ ~0.1 and the variance estimate is good to ~10%; at least 85% of all
-//! pixel-channels must qualify, so the test cannot quietly test nothing. (Below 100 — e.g. the
-//! wall pixel reached by uniform directions in ~0.1% of samples — a pilot's own
-//! variance is as unreliable as the mean, and z fails without bias: measured 6.2 for a pixel with
-//! a few rare hits.) The bound is Šidák's two-sided critical value at family-wise α = 0.001 over
-//! all 6 × pixels × 3 tests. A pixel with zero variance in both must match exactly (to rounding).
-//! A biased strategy (a missing cosine, a wrong pdf normalisation) shifts whole regions by many σ and fails.
+//! `(Σx)²/Σx²`, about the number of samples that carry the value) is at least 300, and at least
+//! 75% of all pixel-channels must qualify, so the test cannot quietly test nothing. Why 300: with
+//! rare carrying samples the mean is skewed and the sample variance under-estimates the true one
+//! (measured for a ceiling pixel with ESS ≈ 145: spread over 12 seeds 0.0039, claimed σ 0.0029),
+//! and an earlier version of this test at ESS ≥ 100 failed at z = 6.05 on an unbiased pixel
+//! (its mean over 12 seeds matched the reference to 0.1σ) when a change of the samplers' hashing
+//! changed the random streams. At ESS ≥ 300 (8×8 pixels at 32768 spp, so ESS per pixel is ~4.5×
+//! higher) the worst |z| over four different seed sets was 2.7, 3.5, 3.1, 2.9 against the bound
+//! 4.92, about what the maximum of ~1100 standard normals should be (3.3). The bound is Šidák's
+//! two-sided critical value at family-wise α = 0.001 over all 6 × pixels × 3 tests. A pixel with
+//! zero variance in both must match exactly (to rounding). A biased strategy shifts whole regions
+//! by many σ and fails: a 5% error in the uniform pdf fails at z = 5.07 on the first pixel checked.
 //!
 //! The scene is the Cornell box with a larger light (300 × 300 mm) and a broader glossy lobe
-//! (Ns 20 instead of 200), written by the test from the shipped files, rendered 12×12 at max
+//! (Ns 20 instead of 200), written by the test from the shipped files, rendered 8×8 at max
 //! depth 8 (Russian roulette included). Why not the shipped box: with its small light and
 //! Ns = 200 box, *uniform* directions reach the light in ~1% of samples, and through the glossy
 //! lobe with weights ~100×; pixel distributions are then so heavy-tailed that at affordable spp
@@ -45,9 +49,9 @@ use vrpt::stats::{normal_critical_value, sidak};
 
 fn check_all_combinations(name: &str, scene: &Scene, max_depth: u32) {
     let base = RenderSettings {
-        width: 12,
-        height: 12,
-        spp: 16384,
+        width: 8,
+        height: 8,
+        spp: 32768,
         max_depth,
         ..Default::default()
     };
@@ -55,7 +59,7 @@ fn check_all_combinations(name: &str, scene: &Scene, max_depth: u32) {
         render_quiet(
             scene,
             &RenderSettings {
-                spp: 65536,
+                spp: 131072,
                 sampler,
                 directions,
                 seed,
@@ -110,7 +114,7 @@ fn check_all_combinations(name: &str, scene: &Scene, max_depth: u32) {
                         );
                         continue;
                     }
-                    if ess[c] < 100.0 {
+                    if ess[c] < 300.0 {
                         continue;
                     }
                     tested += 1;
@@ -129,7 +133,7 @@ fn check_all_combinations(name: &str, scene: &Scene, max_depth: u32) {
                 pixels * 3
             );
             assert!(
-                tested as f64 >= 0.85 * (pixels * 3) as f64,
+                tested as f64 >= 0.75 * (pixels * 3) as f64,
                 "{name} {sampler}+{directions}: only {tested} pixel-channels testable"
             );
         }

@@ -6,7 +6,7 @@
 use crate::analysis::experiments::Convergence;
 use crate::analysis::metrics::false_colour;
 use crate::error::{Error, Result};
-use crate::image_io::{tonemap, write_bytes, Format};
+use crate::image_io::{tonemap, write_bytes, write_png_rgb8, Format};
 use glam::Vec3;
 use plotters::prelude::*;
 use std::path::Path;
@@ -131,19 +131,9 @@ pub fn write_convergence_plot(path: &Path, c: &Convergence, title: &str) -> Resu
             title,
         )
         .map_err(|m| draw_err(path, m))?;
-        write_rgb_png(path, size.0, size.1, &buf)
+        write_png_rgb8(path, size.0, size.1, &buf)
     }
 }
-
-fn write_rgb_png(path: &Path, w: u32, h: u32, rgb: &[u8]) -> Result<()> {
-    let mut png = Vec::new();
-    image::codecs::png::PngEncoder::new(&mut png)
-        .write_image(rgb, w, h, image::ExtendedColorType::Rgb8)
-        .map_err(|e| draw_err(path, e))?;
-    write_bytes(path, &png)
-}
-
-use image::ImageEncoder as _;
 
 /// One row of an image grid: a label, an image and its per-pixel error map.
 pub struct GridRow<'a> {
@@ -228,5 +218,5 @@ pub fn write_image_grid(
         }
         root.present().map_err(|e| draw_err(path, e))?;
     }
-    write_rgb_png(path, gw, gh, &buf)
+    write_png_rgb8(path, gw, gh, &buf)
 }
