@@ -117,11 +117,6 @@ impl Film {
             .collect()
     }
 
-    /// Total samples over all pixels.
-    pub fn total_samples(&self) -> u64 {
-        self.count.iter().sum()
-    }
-
     /// Add `other`'s samples to this film (same size). Exact: sums add.
     pub fn merge(&mut self, other: &Film) -> bool {
         if (self.width, self.height) != (other.width, other.height) {

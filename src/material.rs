@@ -149,12 +149,6 @@ impl Material {
         self.emission.max_element() > 0.0
     }
 
-    /// The probability that `phong` sampling picks the diffuse lobe.
-    #[inline]
-    pub fn diffuse_probability(&self) -> f32 {
-        self.p_diffuse
-    }
-
     /// `cosα` between `wi` and the mirror direction of `wo`.
     #[inline]
     fn cos_alpha(wo: Vec3, wi: Vec3) -> f32 {
