@@ -26,14 +26,7 @@ fn reference(scene: &Scene, w: u32, h: u32, spp: u32, max_depth: u32) -> RgbImag
         seed: 999,
         ..Default::default()
     };
-    let (film, stats) = render_quiet(scene, &s);
-    RgbImage {
-        width: w,
-        height: h,
-        pixels: film.mean_image(),
-        variance: Some(film.variance_image()),
-        metadata: vrpt::cli::metadata(scene, &s, &stats),
-    }
+    as_image(scene, &s)
 }
 
 fn settings(w: u32, h: u32, max_depth: u32, runs: u32) -> ExperimentSettings {
