@@ -116,6 +116,14 @@ impl FastDiv {
     }
 }
 
+/// `s + j` for stratum `s` and jitter `j ∈ [0, 1)`, kept below `s + 1`: in f32, `s + j` rounds
+/// up to `s + 1` when `j` is within half an ulp of `s` of 1, which would put the sample on the
+/// next stratum's boundary.
+#[inline]
+fn jitter_in(s: u32, j: f32) -> f32 {
+    (s as f32 + j).min(((s + 1) as f32).next_down())
+}
+
 /// Jittered strata per dimension, N samples per pixel per pass.
 #[derive(Clone, Debug)]
 pub struct StratifiedSampler {
@@ -184,7 +192,7 @@ impl Sampler for StratifiedSampler {
     #[inline]
     fn next_1d(&mut self) -> f32 {
         let (s, h) = self.next_stratum();
-        ((s as f32 + u64_to_unit_f32(h)) * self.inv.0).min(ONE_MINUS_EPSILON)
+        (jitter_in(s, u64_to_unit_f32(h)) * self.inv.0).min(ONE_MINUS_EPSILON)
     }
 
     #[inline]
@@ -193,8 +201,8 @@ impl Sampler for StratifiedSampler {
         let sy = self.div_a.div(s);
         let sx = s - sy * self.grid.0;
         Vec2::new(
-            ((sx as f32 + u64_to_unit_f32(h)) * self.inv.1).min(ONE_MINUS_EPSILON),
-            ((sy as f32 + u64_to_unit_f32(h << 24)) * self.inv.2).min(ONE_MINUS_EPSILON),
+            (jitter_in(sx, u64_to_unit_f32(h)) * self.inv.1).min(ONE_MINUS_EPSILON),
+            (jitter_in(sy, u64_to_unit_f32(h << 24)) * self.inv.2).min(ONE_MINUS_EPSILON),
         )
     }
 }
