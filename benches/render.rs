@@ -5,7 +5,8 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Through
 use std::hint::black_box;
 use std::path::Path;
 use std::time::Duration;
-use vrpt::render::{render, NoProgress, RenderSettings, Strategy};
+use vrpt::render::{render, NoProgress, RenderSettings};
+use vrpt::strategy::Preset;
 
 fn scenes(c: &mut Criterion) {
     for name in ["cornell-box", "glossy-plates", "checker-plane"] {
@@ -22,18 +23,16 @@ fn scenes(c: &mut Criterion) {
             .warm_up_time(Duration::from_secs(1))
             .measurement_time(Duration::from_secs(3))
             .throughput(Throughput::Elements((w * h * spp) as u64));
-        for st in Strategy::ALL {
-            let (sampler, directions) = st.axes();
+        for st in Preset::all() {
             let s = RenderSettings {
                 width: w,
                 height: h,
                 spp,
                 max_depth,
-                sampler,
-                directions,
+                strategy: st,
                 ..Default::default()
             };
-            g.bench_with_input(BenchmarkId::from_parameter(st.name()), &s, |b, s| {
+            g.bench_with_input(BenchmarkId::from_parameter(st), &s, |b, s| {
                 b.iter(|| black_box(render(&scene, s, &NoProgress).unwrap()))
             });
         }

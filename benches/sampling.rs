@@ -1,27 +1,30 @@
 //! Samplers and warps: draws per second. The independent sampler is the baseline; the
 //! stratified sampler adds a hashed permutation per dimension. Each iteration draws one path
-//! sample's worth of dimensions (pixel 2D + 4 bounces of 1D, 2D, 1D) for 4096 samples.
+//! sample's worth of dimensions (the renderer's layout: camera, then 4 bounces) for 4096
+//! samples.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use glam::{UVec2, Vec2};
 use std::hint::black_box;
 use std::time::Duration;
+use vrpt::sampler::layout::{BounceSample, CameraSample, BOUNCE_DIMS, CAMERA_DIMS};
 use vrpt::sampler::{IndependentSampler, Sampler, StratifiedSampler};
 use vrpt::sampling::*;
 
 const SAMPLES: u32 = 4096;
-/// Dimensions drawn per sample (pixel: 1 2D; per bounce: 1D + 2D + 1D, 4 bounces).
-const DRAWS: u64 = 1 + 4 * 3;
+/// Bounces per path sample.
+const BOUNCES: usize = 4;
+/// Dimensions drawn per sample.
+const DRAWS: u64 = (CAMERA_DIMS.len() + BOUNCES * BOUNCE_DIMS.len()) as u64;
 
 fn draw_path<S: Sampler>(s: &mut S) -> f32 {
     let mut acc = 0.0;
     for i in 0..SAMPLES {
         s.start_pixel_sample(UVec2::new(7, 3), i);
-        acc += s.next_2d().x;
-        for _ in 0..4 {
-            acc += s.next_1d();
-            acc += s.next_2d().y;
-            acc += s.next_1d();
+        acc += CameraSample::draw(s).pixel.x;
+        for _ in 0..BOUNCES {
+            let b = BounceSample::draw(s);
+            acc += b.lobe + b.direction.y + b.roulette;
         }
     }
     acc

@@ -79,6 +79,7 @@ fn main() {
                 .map(|&p| MeshTriangle {
                     p,
                     normals: None,
+                    uvs: None,
                     material: 0,
                 })
                 .collect(),

@@ -1,32 +1,25 @@
-//! The command line: argument definitions (clap) and what each command does. `main.rs` only
-//! parses and calls [`run`]; errors come back as one line for it to print.
+//! The command line (the binary's side): argument definitions (clap), and for each command the
+//! calls into the library, the progress bars and the printing. Errors come back to `main` as
+//! one line.
 
-use crate::analysis::experiments::{
-    compare, converge, Comparison, Convergence, ExperimentProgress, ExperimentSettings, Silent,
-    StrategySpec,
-};
-use crate::analysis::merge::merge;
-use crate::analysis::metrics::{bias_z_scores, false_colour, metrics, relative_error_map};
-use crate::analysis::plots::{error_scale, write_convergence_plot, write_image_grid, GridRow};
-use crate::error::{Error, Result};
-use crate::image_io::{read_exr, write_exr, write_image, write_png_rgb8, Format, RgbImage};
-use crate::material::Directions;
-use crate::render::{
-    render_passes, NoProgress, PassPlan, Progress, RenderSettings, RenderStats, Strategy,
-};
-use crate::sampler::SamplerKind;
-use crate::scene::{self, Scene};
 use clap::{Args, Parser, Subcommand};
-use std::collections::BTreeMap;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
-
-/// Built-in defaults, used where neither a flag nor scene.toml says otherwise.
-pub const DEFAULT_WIDTH: u32 = 256;
-pub const DEFAULT_HEIGHT: u32 = 256;
-pub const DEFAULT_SPP: u32 = 16;
-pub const DEFAULT_MAX_DEPTH: u32 = 8;
+use vrpt::analysis::experiments::{
+    compare, converge, write_csv, ExperimentProgress, ExperimentSettings, Silent,
+};
+use vrpt::analysis::merge::{merge, MergeInput};
+use vrpt::analysis::metrics::{image_bias, mean_variance, metrics};
+use vrpt::analysis::plots::{write_comparison_grid, write_convergence_plot, write_error_map};
+use vrpt::bsdf::Directions;
+use vrpt::error::{Error, Result};
+use vrpt::image_io::{check_image_path, check_writable, read_exr, write_bytes, write_exr, Format};
+use vrpt::output::{write_render, RenderMetadata};
+use vrpt::render::{render_passes, NoProgress, PassPlan, Progress, RenderSettings};
+use vrpt::sampler::SamplerKind;
+use vrpt::scene::{self, Scene};
+use vrpt::strategy::{Preset, Strategy};
 
 /// vrpt: a path tracer for seeing and measuring variance reduction in Monte Carlo rendering.
 #[derive(Debug, Parser)]
@@ -53,14 +46,14 @@ pub enum Command {
     Converge(ConvergeArgs),
 }
 
-/// How points and directions are sampled: a preset, or the two axes separately.
+/// How points and directions are sampled: a preset, or the axes separately.
 #[derive(Debug, Clone, Args)]
 pub struct StrategyArgs {
     /// Named strategy: independent (= independent + uniform), stratified (= stratified +
     /// uniform), importance (= independent + phong), combined (= stratified + phong). Cannot
     /// be combined with a --sampler or --directions that disagrees with it.
     #[arg(long, value_enum)]
-    pub strategy: Option<Strategy>,
+    pub strategy: Option<Preset>,
     /// Where sample points come from: independent (i.i.d. uniform) or stratified (jittered
     /// strata per dimension; square spp such as 16, 64, 256 stratify best in 2D, a prime spp
     /// gives N×1 slabs). Default: stratified.
@@ -73,28 +66,32 @@ pub struct StrategyArgs {
 }
 
 impl StrategyArgs {
-    /// The (sampler, directions) pair the flags ask for; an error if they conflict.
-    pub fn resolve(&self) -> Result<(SamplerKind, Directions)> {
-        let (ds, dd) = Strategy::Combined.axes();
-        match self.strategy {
-            None => Ok((self.sampler.unwrap_or(ds), self.directions.unwrap_or(dd))),
-            Some(st) => {
-                let (s, d) = st.axes();
-                if self.sampler.is_some_and(|x| x != s) {
-                    return Err(Error::Settings(format!(
-                        "--strategy {st} uses --sampler {s}, not --sampler {}",
-                        self.sampler.unwrap()
-                    )));
-                }
-                if self.directions.is_some_and(|x| x != d) {
-                    return Err(Error::Settings(format!(
-                        "--strategy {st} uses --directions {d}, not --directions {}",
-                        self.directions.unwrap()
-                    )));
-                }
-                Ok((s, d))
-            }
+    /// The strategy the flags ask for; an error if a flag contradicts the preset.
+    pub fn resolve(&self) -> Result<Strategy> {
+        let Some(preset) = self.strategy else {
+            let d = Strategy::default();
+            return Ok(Strategy {
+                sampler: self.sampler.unwrap_or(d.sampler),
+                directions: self.directions.unwrap_or(d.directions),
+            });
+        };
+        let st = preset.strategy();
+        let conflict = |flag: &str, uses: String, asked: String| {
+            Error::Settings(format!(
+                "--strategy {preset} uses --{flag} {uses}, not --{flag} {asked}"
+            ))
+        };
+        if let Some(x) = self.sampler.filter(|&x| x != st.sampler) {
+            return Err(conflict("sampler", st.sampler.to_string(), x.to_string()));
         }
+        if let Some(x) = self.directions.filter(|&x| x != st.directions) {
+            return Err(conflict(
+                "directions",
+                st.directions.to_string(),
+                x.to_string(),
+            ));
+        }
+        Ok(st)
     }
 }
 
@@ -159,32 +156,30 @@ fn positive_seconds(s: &str) -> std::result::Result<f64, String> {
     }
 }
 
-/// A comma-separated list of strategies (one flag value).
+/// A comma-separated list given as one flag value (a newtype, so clap takes it as one value).
 #[derive(Clone, Debug, PartialEq)]
-pub struct StrategyList(pub Vec<StrategySpec>);
+pub struct List<T>(pub Vec<T>);
 
-/// A comma-separated list of sample counts (one flag value).
-#[derive(Clone, Debug, PartialEq)]
-pub struct SppList(pub Vec<u32>);
-
-fn strategy_list(s: &str) -> std::result::Result<StrategyList, String> {
+/// A comma-separated list of strategies, or `all`.
+fn strategy_list(s: &str) -> std::result::Result<List<Strategy>, String> {
     if s.trim() == "all" {
-        return Ok(StrategyList(StrategySpec::all_pairs()));
+        return Ok(List(Strategy::all()));
     }
     s.split(',')
-        .map(StrategySpec::parse)
+        .map(Strategy::parse)
         .collect::<std::result::Result<_, _>>()
-        .map(StrategyList)
+        .map(List)
 }
 
-fn spp_list(s: &str) -> std::result::Result<SppList, String> {
+/// A comma-separated list of positive sample counts.
+fn spp_list(s: &str) -> std::result::Result<List<u32>, String> {
     s.split(',')
         .map(|x| match x.trim().parse::<u32>() {
             Ok(n) if n > 0 => Ok(n),
             _ => Err(format!("'{x}' is not a positive sample count")),
         })
         .collect::<std::result::Result<_, _>>()
-        .map(SppList)
+        .map(List)
 }
 
 /// `vrpt merge`.
@@ -219,10 +214,10 @@ pub struct ExperimentArgs {
     /// depth are used, and its scene hash must match the scene.
     #[arg(long)]
     pub reference: PathBuf,
-    /// Strategies, comma-separated: independent, stratified, importance, combined, or
-    /// SAMPLER+DIRECTIONS (e.g. stratified+cosine); `all` for all six pairs.
-    #[arg(long, value_parser = strategy_list, default_value = "independent,stratified,importance,combined")]
-    pub strategies: StrategyList,
+    /// Strategies, comma-separated.
+    #[arg(long, value_parser = strategy_list, default_value = "independent,stratified,importance,combined",
+          long_help = Strategy::list_help())]
+    pub strategies: List<Strategy>,
     /// Independent runs per strategy (seeds SEED, SEED+1, …).
     #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(2..))]
     pub runs: u32,
@@ -270,7 +265,7 @@ pub struct ConvergeArgs {
     pub common: ExperimentArgs,
     /// Sample counts, comma-separated; each is rendered from scratch.
     #[arg(long, value_parser = spp_list, default_value = "1,4,16,64,256")]
-    pub spp: SppList,
+    pub spp: List<u32>,
     /// Write the log-log plot of MSE against spp (.svg or .png); may be given twice.
     #[arg(long, value_name = "FILE")]
     pub plot: Vec<PathBuf>,
@@ -287,57 +282,65 @@ pub fn run(cli: Cli) -> Result<()> {
     }
 }
 
+/// Print to stdout; a closed pipe (`vrpt diff … | head -1`) ends the output quietly.
+fn out(text: &str) {
+    use std::io::Write;
+    let _ = std::io::stdout().lock().write_all(text.as_bytes());
+}
+
 fn warn(msg: &str) {
     eprintln!("warning: {msg}");
 }
 
-/// Render settings from flags over scene.toml defaults over built-in defaults.
-pub fn render_settings(args: &RenderArgs, scene: &Scene) -> Result<RenderSettings> {
-    let (sampler, directions) = args.strategy.resolve()?;
-    let d = &scene.defaults;
+/// A progress bar, when stderr is a terminal and the user did not ask for quiet.
+struct Bar(indicatif::ProgressBar);
+
+impl Bar {
+    fn new(quiet: bool, total: u64, template: &str) -> Option<Bar> {
+        if quiet || !std::io::stderr().is_terminal() {
+            return None;
+        }
+        let bar = indicatif::ProgressBar::new(total);
+        bar.set_style(indicatif::ProgressStyle::with_template(template).expect("static template"));
+        Some(Bar(bar))
+    }
+}
+
+impl Progress for Bar {
+    fn advance(&self, pixels: u64) {
+        self.0.inc(pixels);
+    }
+}
+
+impl ExperimentProgress for Bar {
+    fn finished(&self, label: &str, weight: u64) {
+        self.0.set_message(label.to_string());
+        self.0.inc(weight);
+    }
+}
+
+impl Drop for Bar {
+    fn drop(&mut self) {
+        self.0.finish_and_clear();
+    }
+}
+
+/// Render settings: flags over scene.toml's defaults over the built-in ones.
+fn render_settings(args: &RenderArgs, scene: &Scene) -> Result<RenderSettings> {
+    let d = RenderSettings::for_scene(scene);
     Ok(RenderSettings {
-        width: args.width.or(d.width).unwrap_or(DEFAULT_WIDTH),
-        height: args.height.or(d.height).unwrap_or(DEFAULT_HEIGHT),
-        spp: args.spp.or(d.spp).unwrap_or(DEFAULT_SPP),
+        width: args.width.unwrap_or(d.width),
+        height: args.height.unwrap_or(d.height),
+        spp: args.spp.unwrap_or(d.spp),
         first_sample: args.first_sample,
-        max_depth: args.max_depth.or(d.max_depth).unwrap_or(DEFAULT_MAX_DEPTH),
+        max_depth: args.max_depth.unwrap_or(d.max_depth),
         seed: args.seed,
-        sampler,
-        directions,
+        strategy: args.strategy.resolve()?,
         threads: args.threads.map(|t| t as usize),
     })
 }
 
-/// The metadata vrpt records in every EXR it writes.
-pub fn metadata(
-    scene: &Scene,
-    s: &RenderSettings,
-    stats: &RenderStats,
-) -> BTreeMap<String, String> {
-    let strategy = Strategy::from_axes(s.sampler, s.directions).map_or("custom", |x| x.name());
-    [
-        ("scene", scene.source.display().to_string()),
-        ("scene_hash", format!("{:016x}", scene.hash)),
-        ("width", s.width.to_string()),
-        ("height", s.height.to_string()),
-        ("spp", s.spp.to_string()),
-        ("first_sample", s.first_sample.to_string()),
-        ("seed", s.seed.to_string()),
-        ("sampler", s.sampler.to_string()),
-        ("directions", s.directions.to_string()),
-        ("strategy", strategy.to_string()),
-        ("max_depth", s.max_depth.to_string()),
-        (
-            "render_seconds",
-            format!("{:.6}", stats.elapsed.as_secs_f64()),
-        ),
-        ("nonfinite_samples", stats.nonfinite.to_string()),
-    ]
-    .into_iter()
-    .map(|(k, v)| (k.to_string(), v))
-    .collect()
-}
-
+/// `SCENE-NAME.png` in the current folder (`render.png` for a bare scene.toml).
 fn default_output(scene_path: &Path) -> PathBuf {
     let stem = if scene_path.is_dir() {
         scene_path.file_name()
@@ -346,18 +349,11 @@ fn default_output(scene_path: &Path) -> PathBuf {
     };
     let stem = stem.map_or("render".into(), |s| s.to_string_lossy().into_owned());
     let stem = if stem == "scene" {
-        "render".to_string()
+        "render".into()
     } else {
         stem
     };
     PathBuf::from(format!("{stem}.png"))
-}
-
-/// Check before a long render that `path` can be written: a known image format, an existing
-/// folder.
-fn check_output(path: &Path) -> Result<()> {
-    Format::from_path(path)?;
-    check_output_any(path)
 }
 
 fn run_render(args: &RenderArgs) -> Result<()> {
@@ -365,15 +361,14 @@ fn run_render(args: &RenderArgs) -> Result<()> {
         .output
         .clone()
         .unwrap_or_else(|| default_output(&args.scene));
-    check_output(&output)?;
+    check_image_path(&output)?;
     if let Some(v) = &args.variance {
-        if Format::from_path(v)? != Format::Exr {
+        if check_image_path(v)? != Format::Exr {
             return Err(Error::Settings(format!(
                 "--variance {}: the variance image must be an .exr",
                 v.display()
             )));
         }
-        check_output(v)?;
     }
     let scene = scene::load(&args.scene)?;
     for w in &scene.warnings {
@@ -386,72 +381,32 @@ fn run_render(args: &RenderArgs) -> Result<()> {
             .or(args.time_limit.map(|_| 16.min(settings.spp))),
         time_limit: args.time_limit.map(Duration::from_secs_f64),
     };
-    let show_progress = !args.quiet && std::io::stderr().is_terminal();
-    let bar = if show_progress {
-        let passes = settings.spp.div_ceil(plan.pass_spp.unwrap_or(settings.spp)) as u64;
-        let bar =
-            indicatif::ProgressBar::new(settings.width as u64 * settings.height as u64 * passes);
-        bar.set_style(
-            indicatif::ProgressStyle::with_template(
-                "{spinner} [{elapsed_precise}] {bar:40} {percent}% ETA {eta}",
-            )
-            .expect("static template"),
-        );
-        Some(bar)
-    } else {
-        None
-    };
-    let progress: &dyn Progress = match &bar {
-        Some(b) => b,
-        None => &NoProgress,
-    };
+    let passes = settings.spp.div_ceil(plan.pass_spp.unwrap_or(settings.spp)) as u64;
+    let pixels = settings.width as u64 * settings.height as u64;
+    let bar = Bar::new(
+        args.quiet,
+        pixels * passes,
+        "{spinner} [{elapsed_precise}] {bar:40} {percent}% ETA {eta}",
+    );
+    let progress: &dyn Progress = bar.as_ref().map_or(&NoProgress, |b| b);
     let (film, stats, reached) = render_passes(&scene, &settings, &plan, progress)?;
+    drop(bar);
     let settings = RenderSettings {
         spp: reached,
         ..settings
     };
-    if let Some(b) = &bar {
-        b.finish_and_clear();
-    }
-    let mut meta = metadata(&scene, &settings, &stats);
-    if let Some(p) = plan.pass_spp {
-        meta.insert("pass_spp".into(), p.to_string());
-    }
-    if let Some(t) = args.time_limit {
-        meta.insert("time_limit_seconds".into(), t.to_string());
-    }
-    let mean = film.mean_image();
-    match Format::from_path(&output)? {
-        // EXRs carry the variance of the mean too, so they can be merged and compared exactly
-        Format::Exr => write_exr(
-            &output,
-            film.width,
-            film.height,
-            &mean,
-            Some(&film.variance_image()),
-            &meta,
-        )?,
-        Format::Png => write_image(
-            &output,
-            film.width,
-            film.height,
-            &mean,
-            &meta,
-            args.exposure,
-        )?,
-    }
-    if let Some(v) = &args.variance {
-        let mut vmeta = meta.clone();
-        vmeta.insert("image".into(), "variance of the mean".into());
-        write_exr(
-            v,
-            film.width,
-            film.height,
-            &film.variance_image(),
-            None,
-            &vmeta,
-        )?;
-    }
+    let meta = RenderMetadata {
+        pass_spp: plan.pass_spp,
+        time_limit_seconds: args.time_limit,
+        ..RenderMetadata::new(&scene, &settings, &stats)
+    };
+    write_render(
+        &output,
+        &film,
+        &meta,
+        args.exposure,
+        args.variance.as_deref(),
+    )?;
     if stats.nonfinite > 0 {
         warn(&format!(
             "{} non-finite radiance samples were dropped (not written into the image)",
@@ -459,70 +414,25 @@ fn run_render(args: &RenderArgs) -> Result<()> {
         ));
     }
     if !args.quiet {
-        eprintln!(
-            "{}: {} triangles, BVH built in {:.1} ms ({:.1} KiB)",
-            scene.source.display(),
-            scene.triangle_count(),
-            scene.accel.build_time.as_secs_f64() * 1e3,
-            scene.accel.memory_bytes() as f64 / 1024.0
-        );
-        eprintln!(
-            "rendered {}x{} at {} spp ({} + {}, max depth {}) in {:.3} s: {:.3} M samples/s, {:.2} Mrays/s",
-            settings.width,
-            settings.height,
-            settings.spp,
-            settings.sampler,
-            settings.directions,
-            settings.max_depth,
-            stats.elapsed.as_secs_f64(),
-            stats.samples_per_second() / 1e6,
-            stats.mrays_per_second()
-        );
-        eprintln!(
-            "rays: {} ({} camera, {} bounce; {:.2} per sample)",
-            stats.rays,
-            stats.samples,
-            stats.rays - stats.samples,
-            stats.rays as f64 / stats.samples.max(1) as f64
-        );
+        eprint!("{}", stats.summary(&scene, &settings));
         eprintln!("wrote {}", output.display());
     }
     Ok(())
 }
 
-fn experiment_bar(quiet: bool, total: u64) -> Option<indicatif::ProgressBar> {
-    if quiet || !std::io::stderr().is_terminal() {
-        return None;
-    }
-    let bar = indicatif::ProgressBar::new(total);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(
-            "{spinner} [{elapsed_precise}] {bar:30} {percent}% ETA {eta} {msg}",
-        )
-        .expect("static template"),
-    );
-    Some(bar)
-}
-
 fn run_merge(args: &MergeArgs) -> Result<()> {
-    check_output(&args.output)?;
-    if Format::from_path(&args.output)? != Format::Exr {
+    if check_image_path(&args.output)? != Format::Exr {
         return Err(Error::Settings(format!(
             "-o {}: a merge is written as .exr",
             args.output.display()
         )));
     }
-    let images = args
+    let inputs = args
         .inputs
         .iter()
-        .map(|p| read_exr(p))
+        .map(|p| MergeInput::read(p))
         .collect::<Result<Vec<_>>>()?;
-    let names: Vec<String> = args
-        .inputs
-        .iter()
-        .map(|p| p.display().to_string())
-        .collect();
-    let m = merge(&images, &names)?;
+    let (m, meta) = merge(&inputs)?;
     write_exr(
         &args.output,
         m.width,
@@ -533,9 +443,9 @@ fn run_merge(args: &MergeArgs) -> Result<()> {
     )?;
     eprintln!(
         "merged {} renders into {} ({} spp)",
-        images.len(),
+        inputs.len(),
         args.output.display(),
-        m.metadata["spp"]
+        meta.spp
     );
     Ok(())
 }
@@ -543,6 +453,8 @@ fn run_merge(args: &MergeArgs) -> Result<()> {
 fn run_diff(args: &DiffArgs) -> Result<()> {
     let a = read_exr(&args.image)?;
     let r = read_exr(&args.reference)?;
+    RenderMetadata::from_image(&a, &args.image)?;
+    RenderMetadata::from_image(&r, &args.reference)?;
     if (a.width, a.height) != (r.width, r.height) {
         return Err(Error::Settings(format!(
             "{} is {}×{} but {} is {}×{}",
@@ -555,242 +467,109 @@ fn run_diff(args: &DiffArgs) -> Result<()> {
         )));
     }
     if let Some(p) = &args.error_map {
-        check_output(p)?;
+        check_image_path(p)?;
     }
     let m = metrics(&a.pixels, &r.pixels);
-    println!("MSE                {:.6e}", m.mse);
-    println!("relMSE (eps 0.01)  {:.6e}", m.rel_mse);
-    println!("RMSE               {:.6e}", m.rmse);
-    println!("MAE                {:.6e}", m.mae);
-    println!("mean signed error  {:+.6e}", m.mean_signed_error);
+    let mut t = format!("MSE                {:.6e}\n", m.mse);
+    t += &format!("relMSE (eps 0.01)  {:.6e}\n", m.rel_mse);
+    t += &format!("RMSE               {:.6e}\n", m.rmse);
+    t += &format!("MAE                {:.6e}\n", m.mae);
+    t += &format!("mean signed error  {:+.6e}\n", m.mean_signed_error);
     if let Some(v) = &a.variance {
-        let mean_var =
-            v.iter().map(|p| (p.x + p.y + p.z) as f64).sum::<f64>() / (3 * v.len()) as f64;
-        println!("variance of mean   {mean_var:.6e}");
-        let z = bias_z_scores(&a.pixels, v, &r.pixels, r.variance.as_deref());
-        let (mut sum_d, mut sum_v, mut max_z) = (0.0f64, 0.0f64, 0.0f64);
-        for i in 0..a.pixels.len() {
-            for c in 0..3 {
-                sum_d += (a.pixels[i][c] - r.pixels[i][c]) as f64;
-                sum_v += (v[i][c] + r.variance.as_ref().map_or(0.0, |rv| rv[i][c])) as f64;
-                max_z = max_z.max((z[i][c] as f64).abs());
-            }
+        t += &format!("variance of mean   {:.6e}\n", mean_variance(v));
+        let b = image_bias(&a.pixels, v, &r.pixels, r.variance.as_deref());
+        if let Some(z) = b.z {
+            t += &format!("bias z (image)     {z:+.3}\n");
         }
-        if sum_v > 0.0 {
-            println!("bias z (image)     {:+.3}", sum_d / sum_v.sqrt());
-        }
-        println!("max |z| (pixel)    {max_z:.3}");
+        t += &format!("max |z| (pixel)    {:.3}\n", b.max_pixel_z);
     }
+    out(&t);
     if let Some(p) = &args.error_map {
-        let map = relative_error_map(&a.pixels, &r.pixels);
-        let (lo, hi) = error_scale(&[&map]);
-        let rgb: Vec<u8> = false_colour(&map, lo, hi).into_iter().flatten().collect();
-        write_png_rgb8(p, a.width, a.height, &rgb)?;
-        eprintln!(
-            "wrote {} (relative squared error, log scale {lo:.1e}..{hi:.1e})",
+        let (lo, hi) = write_error_map(p, &a, &r)?;
+        out(&format!(
+            "wrote {} (relative squared error, log scale {lo:.1e}..{hi:.1e})\n",
             p.display()
-        );
+        ));
     }
     Ok(())
 }
 
-/// Scene, reference and the settings both experiments share.
-fn experiment_setup(a: &ExperimentArgs) -> Result<(Scene, RgbImage, ExperimentSettings)> {
+/// Scene, reference and the settings both experiments share; checks the output paths.
+fn experiment_setup(
+    a: &ExperimentArgs,
+) -> Result<(Scene, vrpt::image_io::RgbImage, ExperimentSettings)> {
+    for p in [&a.csv, &a.json].into_iter().flatten() {
+        check_writable(p)?;
+    }
     let scene = scene::load(&a.scene)?;
     for w in &scene.warnings {
         warn(w);
     }
     let reference = read_exr(&a.reference)?;
-    let max_depth = match reference.metadata.get("max_depth") {
-        Some(d) => d.parse().map_err(|_| {
-            Error::Settings(format!(
-                "{}: max_depth '{d}' is not a number",
-                a.reference.display()
-            ))
-        })?,
-        None => scene.defaults.max_depth.unwrap_or(DEFAULT_MAX_DEPTH),
-    };
-    let s = ExperimentSettings {
-        width: reference.width,
-        height: reference.height,
-        max_depth,
-        seed: a.seed,
-        runs: a.runs,
-        threads: a.threads.map(|t| t as usize),
-    };
-    crate::analysis::experiments::check_reference(&scene, &reference, &s)?;
-    for p in [&a.csv, &a.json].into_iter().flatten() {
-        check_output_any(p)?;
-    }
+    let s = ExperimentSettings::for_reference(
+        &scene,
+        &reference,
+        &a.reference,
+        a.seed,
+        a.runs,
+        a.threads.map(|t| t as usize),
+    )?;
     Ok((scene, reference, s))
 }
 
-/// Check that `path` can be written: its folder exists and it is not a folder.
-fn check_output_any(path: &Path) -> Result<()> {
-    let err = |message: String| Error::Write {
-        path: path.to_path_buf(),
-        message,
-    };
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        if !dir.is_dir() {
-            return Err(err(format!("folder {} does not exist", dir.display())));
-        }
+/// Print an experiment's table; write its rows as CSV and `json` as JSON where asked.
+fn report<R: serde::Serialize, J: serde::Serialize>(
+    a: &ExperimentArgs,
+    table: &str,
+    rows: &[R],
+    json: &J,
+) -> Result<()> {
+    out(table);
+    if let Some(p) = &a.csv {
+        write_csv(p, rows)?;
     }
-    if path.is_dir() {
-        return Err(err("is a folder".into()));
+    if let Some(p) = &a.json {
+        let text = serde_json::to_string_pretty(json).expect("plain data serializes");
+        write_bytes(p, text.as_bytes())?;
     }
     Ok(())
 }
 
-fn write_text(path: &Path, text: &str) -> Result<()> {
-    crate::image_io::write_bytes(path, text.as_bytes())
-}
-
-fn json<T: serde::Serialize>(v: &T) -> String {
-    serde_json::to_string_pretty(v).expect("plain data serializes")
-}
-
-/// The comparison as a table (what `vrpt compare` prints).
-pub fn compare_table(c: &Comparison) -> String {
-    let mut s = format!(
-        "{:<22} {:>7} {:>9} {:>11} {:>11} {:>11} {:>8} {:>8} {:>10} {:>10}\n",
-        "strategy",
-        "spp",
-        "time s",
-        "MSE",
-        "relMSE",
-        "variance",
-        "bias t",
-        "bias p",
-        "MSE red.",
-        "efficiency"
-    );
-    for r in &c.rows {
-        s += &format!(
-            "{:<22} {:>7.1} {:>9.3} {:>11.4e} {:>11.4e} {:>11.4e} {:>+8.2} {:>8.3} {:>9.2}x {:>9.2}x\n",
-            r.strategy, r.spp, r.seconds, r.mse, r.rel_mse, r.variance, r.bias_t, r.bias_p, r.mse_reduction, r.efficiency
-        );
-    }
-    s += &format!(
-        "(MSE reduction and efficiency 1/(MSE·time) relative to {}; means over {} runs",
-        c.baseline,
-        c.rows.first().map_or(0, |r| r.runs)
-    );
-    if let Some(v) = c.reference_variance {
-        s += &format!("; the reference's own variance, {v:.3e}, is a floor under every MSE");
-    }
-    s += ")\n";
-    s
-}
+const EXPERIMENT_BAR: &str = "{spinner} [{elapsed_precise}] {bar:30} {percent}% ETA {eta} {msg}";
 
 fn run_compare(args: &CompareArgs) -> Result<()> {
     let a = &args.common;
-    let (scene, reference, s) = experiment_setup(a)?;
     if let Some(g) = &args.grid {
-        check_output(g)?;
+        check_image_path(g)?;
     }
-    let strategies: Vec<StrategySpec> = a.strategies.0.clone();
-    let bar = experiment_bar(a.quiet, strategies.len() as u64 * a.runs as u64);
-    let progress: &dyn ExperimentProgress = match &bar {
-        Some(b) => b,
-        None => &Silent,
-    };
+    let (scene, reference, s) = experiment_setup(a)?;
+    let bar = Bar::new(
+        a.quiet,
+        a.strategies.0.len() as u64 * a.runs as u64,
+        EXPERIMENT_BAR,
+    );
+    let progress: &dyn ExperimentProgress = bar.as_ref().map_or(&Silent, |b| b);
     let c = compare(
         &scene,
         &reference,
-        &strategies,
+        &a.strategies.0,
         args.spp,
         args.equal_time.map(Duration::from_secs_f64),
         &s,
         progress,
     )?;
-    if let Some(b) = &bar {
-        b.finish_and_clear();
-    }
-    print!("{}", compare_table(&c));
-    if let Some(p) = &a.csv {
-        let mut t = String::from(
-            "strategy,runs,spp,seconds,mse,rel_mse,rmse,mae,variance,bias_t,bias_p,mse_reduction,efficiency\n",
-        );
-        for r in &c.rows {
-            t += &format!(
-                "{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
-                r.strategy,
-                r.runs,
-                r.spp,
-                r.seconds,
-                r.mse,
-                r.rel_mse,
-                r.rmse,
-                r.mae,
-                r.variance,
-                r.bias_t,
-                r.bias_p,
-                r.mse_reduction,
-                r.efficiency
-            );
-        }
-        write_text(p, &t)?;
-    }
-    if let Some(p) = &a.json {
-        write_text(p, &json(&c.rows))?;
-    }
+    drop(bar);
+    report(a, &c.table(), &c.rows, &c.rows)?;
     if let Some(p) = &args.grid {
-        let maps: Vec<Vec<f64>> = c
-            .images
-            .iter()
-            .map(|img| relative_error_map(img, &reference.pixels))
-            .collect();
-        let rows: Vec<GridRow> = c
-            .rows
-            .iter()
-            .zip(&c.images)
-            .zip(&maps)
-            .map(|((r, img), m)| GridRow {
-                label: format!("{}  {:.0} spp  MSE {:.2e}", r.strategy, r.spp, r.mse),
-                image: img,
-                error: m,
-            })
-            .collect();
-        write_image_grid(
-            p,
-            s.width,
-            s.height,
-            &rows,
-            args.exposure,
-            "rel. error² (log)",
-        )?;
+        write_comparison_grid(p, &c, &reference, args.exposure)?;
     }
     Ok(())
 }
 
-/// The sweep as a table of points and slopes (what `vrpt converge` prints).
-pub fn converge_table(c: &Convergence) -> String {
-    let mut s = format!(
-        "{:<22} {:>7} {:>11} {:>11} {:>9}\n",
-        "strategy", "spp", "MSE", "relMSE", "time s"
-    );
-    for p in &c.points {
-        s += &format!(
-            "{:<22} {:>7} {:>11.4e} {:>11.4e} {:>9.3}\n",
-            p.strategy, p.spp, p.mse, p.rel_mse, p.seconds
-        );
-    }
-    s += "fitted slopes of log error against log spp:\n";
-    for sl in &c.slopes {
-        s += &format!(
-            "{:<22} MSE {:+.3}   relMSE {:+.3}\n",
-            sl.strategy, sl.mse_slope, sl.rel_mse_slope
-        );
-    }
-    s
-}
-
 fn run_converge(args: &ConvergeArgs) -> Result<()> {
     let a = &args.common;
-    let (scene, reference, s) = experiment_setup(a)?;
     for p in &args.plot {
-        check_output_any(p)?;
+        check_writable(p)?;
         let ok = p
             .extension()
             .and_then(|e| e.to_str())
@@ -802,37 +581,27 @@ fn run_converge(args: &ConvergeArgs) -> Result<()> {
             });
         }
     }
-    let spps = &args.spp.0;
-    if spps.len() < 2 {
+    if args.spp.0.len() < 2 {
         return Err(Error::Settings(
             "--spp needs at least two sample counts".into(),
         ));
     }
-    let total =
-        a.strategies.0.len() as u64 * a.runs as u64 * spps.iter().map(|&x| x as u64).sum::<u64>();
-    let bar = experiment_bar(a.quiet, total);
-    let progress: &dyn ExperimentProgress = match &bar {
-        Some(b) => b,
-        None => &Silent,
-    };
-    let c = converge(&scene, &reference, &a.strategies.0, spps, &s, progress)?;
-    if let Some(b) = &bar {
-        b.finish_and_clear();
-    }
-    print!("{}", converge_table(&c));
-    if let Some(p) = &a.csv {
-        let mut t = String::from("strategy,spp,mse,rel_mse,seconds\n");
-        for q in &c.points {
-            t += &format!(
-                "{},{},{},{},{}\n",
-                q.strategy, q.spp, q.mse, q.rel_mse, q.seconds
-            );
-        }
-        write_text(p, &t)?;
-    }
-    if let Some(p) = &a.json {
-        write_text(p, &json(&c))?;
-    }
+    let (scene, reference, s) = experiment_setup(a)?;
+    let total = a.strategies.0.len() as u64
+        * a.runs as u64
+        * args.spp.0.iter().map(|&x| x as u64).sum::<u64>();
+    let bar = Bar::new(a.quiet, total, EXPERIMENT_BAR);
+    let progress: &dyn ExperimentProgress = bar.as_ref().map_or(&Silent, |b| b);
+    let c = converge(
+        &scene,
+        &reference,
+        &a.strategies.0,
+        &args.spp.0,
+        &s,
+        progress,
+    )?;
+    drop(bar);
+    report(a, &c.table(), &c.points, &c)?;
     let name = scene
         .source
         .file_stem()

@@ -55,8 +55,8 @@ impl Film {
     }
 
     /// Add one sample to pixel `i`.
-    #[inline]
-    pub fn add_sample(&mut self, i: usize, v: Vec3) {
+    #[cfg(test)]
+    fn add_sample(&mut self, i: usize, v: Vec3) {
         let v = v.as_dvec3();
         self.add_pixel_sums(i, v, v * v, 1);
     }
@@ -117,15 +117,19 @@ impl Film {
             .collect()
     }
 
-    /// Add `other`'s samples to this film (same size). Exact: sums add.
-    pub fn merge(&mut self, other: &Film) -> bool {
+    /// Add `other`'s samples to this film. Exact: sums add. Films of different sizes do not
+    /// merge: the error says both sizes.
+    pub fn merge(&mut self, other: &Film) -> Result<(), String> {
         if (self.width, self.height) != (other.width, other.height) {
-            return false;
+            return Err(format!(
+                "cannot merge a {}×{} film into a {}×{} one",
+                other.width, other.height, self.width, self.height
+            ));
         }
         for i in 0..self.len() {
             self.add_pixel_sums(i, other.sum[i], other.sum_sq[i], other.count[i]);
         }
-        true
+        Ok(())
     }
 }
 
@@ -168,10 +172,10 @@ mod tests {
             }
             all.add_sample(1, v);
         }
-        assert!(a.merge(&b));
+        a.merge(&b).unwrap();
         assert_eq!(a.count(1), 10);
         assert!((a.mean(1) - all.mean(1)).length() < 1e-12);
         assert!((a.sample_variance(1) - all.sample_variance(1)).length() < 1e-12);
-        assert!(!a.merge(&Film::new(1, 1)));
+        assert!(a.merge(&Film::new(1, 1)).is_err());
     }
 }

@@ -97,14 +97,7 @@ pub fn write_atomically(
         path: path.to_path_buf(),
         message,
     };
-    if path.is_dir() {
-        return Err(err("is a folder".into()));
-    }
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        if !dir.is_dir() {
-            return Err(err(format!("folder {} does not exist", dir.display())));
-        }
-    }
+    check_writable(path)?;
     let tmp = temp_path(path);
     if let Err(e) = write(&tmp) {
         let _ = std::fs::remove_file(&tmp);
@@ -207,19 +200,29 @@ pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<()> {
     })
 }
 
-/// Write `pixels` in the format of `path`'s extension (metadata goes into EXRs only).
-pub fn write_image(
-    path: &Path,
-    width: u32,
-    height: u32,
-    pixels: &[Vec3],
-    metadata: &BTreeMap<String, String>,
-    exposure: f32,
-) -> Result<()> {
-    match Format::from_path(path)? {
-        Format::Exr => write_exr(path, width, height, pixels, None, metadata),
-        Format::Png => write_png(path, width, height, pixels, exposure),
+/// Check before a long job that `path` can be written: its folder exists and it is not a
+/// folder.
+pub fn check_writable(path: &Path) -> Result<()> {
+    let err = |message: String| Error::Write {
+        path: path.to_path_buf(),
+        message,
+    };
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        if !dir.is_dir() {
+            return Err(err(format!("folder {} does not exist", dir.display())));
+        }
     }
+    if path.is_dir() {
+        return Err(err("is a folder".into()));
+    }
+    Ok(())
+}
+
+/// Check that `path` names an image format vrpt writes and can be written; returns the format.
+pub fn check_image_path(path: &Path) -> Result<Format> {
+    let f = Format::from_path(path)?;
+    check_writable(path)?;
+    Ok(f)
 }
 
 /// Read the first RGB layer of an EXR, its `variance.*` channels if any, and vrpt's metadata.

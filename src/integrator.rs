@@ -9,12 +9,13 @@
 //! third bounce on keeps a path with probability `q = min(max β, 0.95)` and divides by `q`: an
 //! unbiased termination.
 //!
-//! Every bounce draws the same dimensions in the same order (lobe 1D, direction 2D, roulette
-//! 1D), used or not, so a dimension index means the same decision in every sample — which is
-//! what stratification needs.
+//! Every bounce draws the same dimensions in the same order ([`BounceSample`], the layout in
+//! [`crate::sampler::layout`]), used or not, so a dimension index means the same decision in
+//! every sample — which is what stratification needs.
 
-use crate::material::Directions;
+use crate::bsdf::Directions;
 use crate::math::Frame;
+use crate::sampler::layout::BounceSample;
 use crate::sampler::Sampler;
 use crate::scene::Scene;
 use glam::Vec3;
@@ -49,7 +50,7 @@ pub fn radiance<S: Sampler>(
             break;
         };
         let s = scene.surface(&hit);
-        let m = &scene.materials[s.material as usize];
+        let m = scene.material_at(&s);
         let wo = -dir;
         let front = s.ng.dot(wo) > 0.0;
         if front && m.is_emissive() {
@@ -58,10 +59,9 @@ pub fn radiance<S: Sampler>(
         if segment == settings.max_depth {
             break;
         }
-        let u_lobe = sampler.next_1d();
-        let u_dir = sampler.next_2d();
-        let u_rr = sampler.next_1d();
-        if m.is_black() {
+        let u = BounceSample::draw(sampler);
+        let bsdf = scene.bsdf_at(&s);
+        if bsdf.is_black() {
             break;
         }
         // Two-sided shading: put both normals on the side the ray came from.
@@ -71,7 +71,7 @@ pub fn radiance<S: Sampler>(
         }
         let frame = Frame::from_normal(ns);
         let wo_local = frame.to_local(wo);
-        let Some(bs) = m.sample(wo_local, u_lobe, u_dir, settings.directions) else {
+        let Some(bs) = bsdf.sample(wo_local, u.lobe, u.direction, settings.directions) else {
             break;
         };
         let wi = frame.to_world(bs.wi);
@@ -82,7 +82,7 @@ pub fn radiance<S: Sampler>(
         let bounce = segment; // vertices so far after the camera
         if bounce >= RR_START_BOUNCE {
             let q = beta.max_element().min(0.95);
-            if u_rr >= q {
+            if u.roulette >= q {
                 break;
             }
             beta /= q;

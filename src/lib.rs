@@ -13,18 +13,21 @@
 
 pub mod accel;
 pub mod analysis;
+pub mod bsdf;
 pub mod camera;
-pub mod cli;
 pub mod error;
 pub mod film;
 pub mod image_io;
 pub mod integrator;
+pub mod lights;
 pub mod material;
 pub mod math;
+pub mod output;
 pub mod render;
 pub mod sampler;
 pub mod sampling;
 pub mod scene;
 pub mod stats;
+pub mod strategy;
 
 pub use error::{Error, Result};

@@ -10,9 +10,10 @@ use crate::camera::Camera;
 use crate::error::{Error, Result};
 use crate::film::Film;
 use crate::integrator::{radiance, IntegratorSettings};
-use crate::material::Directions;
+use crate::sampler::layout::CameraSample;
 use crate::sampler::{IndependentSampler, Sampler, SamplerKind, StratifiedSampler};
 use crate::scene::Scene;
+use crate::strategy::Strategy;
 use glam::{DVec3, UVec2};
 use rayon::prelude::*;
 use std::time::{Duration, Instant};
@@ -31,9 +32,9 @@ pub struct RenderSettings {
     pub first_sample: u32,
     pub max_depth: u32,
     pub seed: u64,
-    pub sampler: SamplerKind,
-    pub directions: Directions,
-    /// Worker threads; `None` uses rayon's global pool (all cores).
+    /// How every random decision is made.
+    pub strategy: Strategy,
+    /// Worker threads; `None` uses the current rayon pool (the global one: all cores).
     pub threads: Option<usize>,
 }
 
@@ -46,9 +47,23 @@ impl Default for RenderSettings {
             first_sample: 0,
             max_depth: 8,
             seed: 0,
-            sampler: SamplerKind::default(),
-            directions: Directions::default(),
+            strategy: Strategy::default(),
             threads: None,
+        }
+    }
+}
+
+impl RenderSettings {
+    /// The built-in defaults with the scene's `[render]` section over them (flags go on top).
+    pub fn for_scene(scene: &Scene) -> Self {
+        let base = RenderSettings::default();
+        let d = &scene.defaults;
+        RenderSettings {
+            width: d.width.unwrap_or(base.width),
+            height: d.height.unwrap_or(base.height),
+            spp: d.spp.unwrap_or(base.spp),
+            max_depth: d.max_depth.unwrap_or(base.max_depth),
+            ..base
         }
     }
 }
@@ -75,17 +90,37 @@ impl RenderStats {
     pub fn samples_per_second(&self) -> f64 {
         self.samples as f64 / self.elapsed.as_secs_f64().max(1e-9)
     }
+
+    /// What a render of `scene` with `settings` (its spp the spp reached) did, in three lines:
+    /// the scene and its BVH, the speed, the rays by kind.
+    pub fn summary(&self, scene: &Scene, settings: &RenderSettings) -> String {
+        format!(
+            "{}: {} triangles, BVH built in {:.1} ms ({:.1} KiB)\n\
+             rendered {}x{} at {} spp ({}, max depth {}) in {:.3} s: {:.3} M samples/s, {:.2} Mrays/s\n\
+             rays: {} ({} camera, {} bounce; {:.2} per sample)\n",
+            scene.source.display(),
+            scene.triangle_count(),
+            scene.accel.build_time.as_secs_f64() * 1e3,
+            scene.accel.memory_bytes() as f64 / 1024.0,
+            settings.width,
+            settings.height,
+            settings.spp,
+            settings.strategy.axes_name(),
+            settings.max_depth,
+            self.elapsed.as_secs_f64(),
+            self.samples_per_second() / 1e6,
+            self.mrays_per_second(),
+            self.rays,
+            self.samples,
+            self.rays - self.samples,
+            self.rays as f64 / self.samples.max(1) as f64
+        )
+    }
 }
 
 /// Something told how many pixels are done (a progress bar).
 pub trait Progress: Sync {
     fn advance(&self, pixels: u64);
-}
-
-impl Progress for indicatif::ProgressBar {
-    fn advance(&self, pixels: u64) {
-        self.inc(pixels);
-    }
 }
 
 /// No progress reporting.
@@ -95,48 +130,70 @@ impl Progress for NoProgress {
     fn advance(&self, _: u64) {}
 }
 
+/// Run `f` on a pool of `threads` workers, built once for the whole job; `None` runs it on the
+/// current pool (rayon's global one: all cores).
+pub fn with_threads<T: Send>(threads: Option<usize>, f: impl FnOnce() -> T + Send) -> Result<T> {
+    match threads {
+        Some(n) => {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(n.max(1))
+                .build()
+                .map_err(|e| Error::Settings(format!("cannot start {n} threads: {e}")))?;
+            Ok(pool.install(f))
+        }
+        None => Ok(f()),
+    }
+}
+
+/// The camera for `settings`, after checking that the settings can be rendered.
+fn camera_for(scene: &Scene, settings: &RenderSettings) -> Result<Camera> {
+    if settings.width == 0 || settings.height == 0 || settings.spp == 0 || settings.max_depth == 0 {
+        return Err(Error::Settings(
+            "width, height, spp and max depth must be at least 1".into(),
+        ));
+    }
+    Camera::new(&scene.camera, settings.width, settings.height).ok_or_else(|| {
+        Error::Settings(format!(
+            "degenerate camera (eye {}, target {}, up {}, fov {}°)",
+            scene.camera.eye, scene.camera.target, scene.camera.up, scene.camera.fov_deg
+        ))
+    })
+}
+
 /// Render `scene` with `settings` into a new film.
 pub fn render(
     scene: &Scene,
     settings: &RenderSettings,
     progress: &dyn Progress,
 ) -> Result<(Film, RenderStats)> {
-    if settings.width == 0 || settings.height == 0 || settings.spp == 0 || settings.max_depth == 0 {
-        return Err(Error::Settings(
-            "width, height, spp and max depth must be at least 1".into(),
-        ));
-    }
-    let camera = Camera::new(&scene.camera, settings.width, settings.height).ok_or_else(|| {
-        Error::Settings(format!(
-            "degenerate camera (eye {}, target {}, up {}, fov {}°)",
-            scene.camera.eye, scene.camera.target, scene.camera.up, scene.camera.fov_deg
-        ))
-    })?;
-    let run = || match settings.sampler {
+    let camera = camera_for(scene, settings)?;
+    with_threads(settings.threads, || {
+        render_on_pool(scene, &camera, settings, progress)
+    })
+}
+
+/// Render on the current rayon pool, with the sampler the strategy names.
+fn render_on_pool(
+    scene: &Scene,
+    camera: &Camera,
+    settings: &RenderSettings,
+    progress: &dyn Progress,
+) -> (Film, RenderStats) {
+    match settings.strategy.sampler {
         SamplerKind::Independent => render_with(
             scene,
-            &camera,
+            camera,
             settings,
             IndependentSampler::new(settings.seed),
             progress,
         ),
         SamplerKind::Stratified => render_with(
             scene,
-            &camera,
+            camera,
             settings,
             StratifiedSampler::new(settings.seed, settings.spp),
             progress,
         ),
-    };
-    match settings.threads {
-        Some(n) => {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(n.max(1))
-                .build()
-                .map_err(|e| Error::Settings(format!("cannot start {n} threads: {e}")))?;
-            Ok(pool.install(run))
-        }
-        None => Ok(run()),
     }
 }
 
@@ -158,33 +215,36 @@ pub fn render_passes(
     plan: &PassPlan,
     progress: &dyn Progress,
 ) -> Result<(Film, RenderStats, u32)> {
+    let camera = camera_for(scene, settings)?;
     let pass = plan
         .pass_spp
         .unwrap_or(settings.spp)
         .clamp(1, settings.spp.max(1));
     let start = Instant::now();
-    let mut film = Film::new(settings.width, settings.height);
-    let mut stats = RenderStats::default();
-    let mut done = 0u32;
-    while done < settings.spp {
-        let n = pass.min(settings.spp - done);
-        let pass_settings = RenderSettings {
-            spp: n,
-            first_sample: settings.first_sample + done,
-            ..settings.clone()
-        };
-        let (f, s) = render(scene, &pass_settings, progress)?;
-        film.merge(&f);
-        stats.rays += s.rays;
-        stats.samples += s.samples;
-        stats.nonfinite += s.nonfinite;
-        done += n;
-        if plan.time_limit.is_some_and(|t| start.elapsed() >= t) {
-            break;
+    with_threads(settings.threads, || {
+        let mut film = Film::new(settings.width, settings.height);
+        let mut stats = RenderStats::default();
+        let mut done = 0u32;
+        while done < settings.spp {
+            let n = pass.min(settings.spp - done);
+            let pass_settings = RenderSettings {
+                spp: n,
+                first_sample: settings.first_sample + done,
+                ..settings.clone()
+            };
+            let (f, s) = render_on_pool(scene, &camera, &pass_settings, progress);
+            film.merge(&f).map_err(Error::Settings)?;
+            stats.rays += s.rays;
+            stats.samples += s.samples;
+            stats.nonfinite += s.nonfinite;
+            done += n;
+            if plan.time_limit.is_some_and(|t| start.elapsed() >= t) {
+                break;
+            }
         }
-    }
-    stats.elapsed = start.elapsed();
-    Ok((film, stats, done))
+        stats.elapsed = start.elapsed();
+        Ok((film, stats, done))
+    })?
 }
 
 /// One tile's result: pixel sums and counters.
@@ -207,7 +267,7 @@ fn render_with<S: Sampler>(
     let start = Instant::now();
     let integrator = IntegratorSettings {
         max_depth: settings.max_depth,
-        directions: settings.directions,
+        directions: settings.strategy.directions,
     };
     let tiles_x = settings.width.div_ceil(TILE);
     let tiles_y = settings.height.div_ceil(TILE);
@@ -233,7 +293,7 @@ fn render_with<S: Sampler>(
                     let (mut sum, mut sum_sq, mut n) = (DVec3::ZERO, DVec3::ZERO, 0u64);
                     for index in settings.first_sample..settings.first_sample + settings.spp {
                         sampler.start_pixel_sample(pixel, index);
-                        let (o, d) = camera.generate_ray(pixel, sampler.next_2d());
+                        let (o, d) = camera.generate_ray(pixel, CameraSample::draw(sampler).pixel);
                         let (l, rays) = radiance(scene, o, d, sampler, &integrator);
                         tile.rays += rays;
                         if l.is_finite() {
@@ -270,60 +330,4 @@ fn render_with<S: Sampler>(
     }
     stats.elapsed = start.elapsed();
     (film, stats)
-}
-
-/// The named points of the (sampler, directions) grid, in the mission's words.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, clap::ValueEnum)]
-pub enum Strategy {
-    /// independent points, uniform hemisphere directions: the naive baseline.
-    Independent,
-    /// stratified points, uniform hemisphere directions.
-    Stratified,
-    /// independent points, Phong-lobe importance sampling.
-    Importance,
-    /// stratified points, Phong-lobe importance sampling: the best combination.
-    Combined,
-}
-
-impl Strategy {
-    /// All presets, in the order experiments report them.
-    pub const ALL: [Strategy; 4] = [
-        Strategy::Independent,
-        Strategy::Stratified,
-        Strategy::Importance,
-        Strategy::Combined,
-    ];
-
-    /// The (sampler, directions) pair this preset names.
-    pub fn axes(self) -> (SamplerKind, Directions) {
-        match self {
-            Strategy::Independent => (SamplerKind::Independent, Directions::Uniform),
-            Strategy::Stratified => (SamplerKind::Stratified, Directions::Uniform),
-            Strategy::Importance => (SamplerKind::Independent, Directions::Phong),
-            Strategy::Combined => (SamplerKind::Stratified, Directions::Phong),
-        }
-    }
-
-    /// The preset that names this pair, if any.
-    pub fn from_axes(sampler: SamplerKind, directions: Directions) -> Option<Strategy> {
-        Strategy::ALL
-            .into_iter()
-            .find(|s| s.axes() == (sampler, directions))
-    }
-
-    /// The name used on the command line and in metadata.
-    pub fn name(self) -> &'static str {
-        match self {
-            Strategy::Independent => "independent",
-            Strategy::Stratified => "stratified",
-            Strategy::Importance => "importance",
-            Strategy::Combined => "combined",
-        }
-    }
-}
-
-impl std::fmt::Display for Strategy {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
 }

@@ -240,3 +240,88 @@ fn help_explains_the_flags() {
         "help says square spp stratify best"
     );
 }
+
+/// `--time-limit`: the render stops at the first whole pass after the limit, and the image
+/// records the spp it reached (a multiple of the pass size, far below the --spp cap) and the
+/// limit.
+#[test]
+fn time_limited_render_stops_at_a_whole_pass() {
+    let dir = tempfile::tempdir().unwrap();
+    let exr = dir.path().join("t.exr");
+    let out = vrpt(&[
+        "render",
+        common::cornell_path().to_str().unwrap(),
+        "-o",
+        exr.to_str().unwrap(),
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--spp",
+        "100000000",
+        "--pass-spp",
+        "4",
+        "--time-limit",
+        "0.3",
+        "--quiet",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let img = vrpt::image_io::read_exr(&exr).unwrap();
+    let m = vrpt::output::RenderMetadata::from_attributes(&img.metadata).unwrap();
+    assert!(m.spp >= 4 && m.spp.is_multiple_of(4), "spp {}", m.spp);
+    // 10⁸ spp of 256 pixels would take hours: the limit stopped it
+    assert!(m.spp < 100_000_000, "spp {}", m.spp);
+    assert_eq!(m.pass_spp, Some(4));
+    assert_eq!(m.time_limit_seconds, Some(0.3));
+    assert!(m.render_seconds >= 0.3, "{}", m.render_seconds);
+}
+
+/// An EXR whose metadata claims another size than its pixels is refused by `merge` and `diff`
+/// with one line, never indexed by the claimed size.
+#[test]
+fn images_whose_metadata_lies_about_their_size_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let a = dir.path().join("a.exr");
+    let out = vrpt(&[
+        "render",
+        common::cornell_path().to_str().unwrap(),
+        "-o",
+        a.to_str().unwrap(),
+        "--width",
+        "4",
+        "--height",
+        "4",
+        "--spp",
+        "2",
+        "-q",
+    ]);
+    assert!(out.status.success());
+    let img = vrpt::image_io::read_exr(&a).unwrap();
+    let mut meta = img.metadata.clone();
+    meta.insert("width".into(), "64".into());
+    meta.insert("first_sample".into(), "2".into());
+    let b = dir.path().join("b.exr");
+    vrpt::image_io::write_exr(&b, 4, 4, &img.pixels, img.variance.as_deref(), &meta).unwrap();
+    let m = dir.path().join("m.exr");
+    assert_one_line_error(
+        &vrpt(&[
+            "merge",
+            a.to_str().unwrap(),
+            b.to_str().unwrap(),
+            "-o",
+            m.to_str().unwrap(),
+        ]),
+        "merge",
+        "64×4",
+    );
+    assert_one_line_error(
+        &vrpt(&["diff", b.to_str().unwrap(), a.to_str().unwrap()]),
+        "diff",
+        "64×4",
+    );
+    assert!(!m.exists());
+}

@@ -7,14 +7,17 @@ mod common;
 
 use common::render_quiet;
 use std::collections::BTreeMap;
-use vrpt::analysis::experiments::{compare, converge, ExperimentSettings, Silent, StrategySpec};
-use vrpt::analysis::merge::merge;
+use std::path::PathBuf;
+use std::sync::OnceLock;
+use vrpt::analysis::experiments::{compare, converge, ExperimentSettings, Silent};
+use vrpt::analysis::merge::{merge, MergeInput};
 use vrpt::image_io::{read_exr, write_exr, RgbImage};
-use vrpt::material::Directions;
+use vrpt::output::RenderMetadata;
 use vrpt::render::{RenderSettings, RenderStats};
 use vrpt::sampler::SamplerKind;
 use vrpt::scene::Scene;
 use vrpt::stats::sidak;
+use vrpt::strategy::{Preset, Strategy};
 
 /// A converged reference: `spp` samples of stratified + phong, as the EXR would hold it.
 fn reference(scene: &Scene, w: u32, h: u32, spp: u32, max_depth: u32) -> RgbImage {
@@ -45,36 +48,37 @@ fn bias_alpha() -> f64 {
     sidak(0.01, 8)
 }
 
-/// Compare the four presets on `scene` at 32×24, `spp` per run, 16 runs, against a reference of
-/// `ref_spp`; assert what holds for every scene (combined within 10% of the best of the others,
-/// the strategies in `bias_tested` unbiased, the baseline and the images there) and return the
-/// MSEs.
+/// The checker plane's reference (32×24, 65536 spp, depth 2), rendered once per test binary
+/// and shared by the tests that need it.
+fn checker_reference(scene: &Scene) -> &'static RgbImage {
+    static REF: OnceLock<RgbImage> = OnceLock::new();
+    REF.get_or_init(|| reference(scene, 32, 24, 65536, 2))
+}
+
+/// Compare the four presets on `scene` at 32×24, `spp` per run, 16 runs, against the reference
+/// `r`; assert what holds for every scene (the strategies in `bias_tested` unbiased, the
+/// baseline and the images there) and return the MSEs.
 fn compare_presets(
     name: &str,
     scene: &Scene,
+    r: &RgbImage,
     max_depth: u32,
-    ref_spp: u32,
     spp: u32,
     bias_tested: &[&str],
 ) -> BTreeMap<String, f64> {
     let (w, h) = (32, 24);
-    let r = reference(scene, w, h, ref_spp, max_depth);
     let c = compare(
         scene,
-        &r,
-        &StrategySpec::presets(),
+        r,
+        &Preset::all(),
         spp,
         None,
         &settings(w, h, max_depth, 16),
         &Silent,
     )
     .unwrap();
-    eprint!("{name}\n{}", vrpt::cli::compare_table(&c));
+    eprint!("{name}\n{}", c.table());
     let mse: BTreeMap<String, f64> = c.rows.iter().map(|r| (r.strategy.clone(), r.mse)).collect();
-    let best_other = mse["independent"]
-        .min(mse["stratified"])
-        .min(mse["importance"]);
-    assert!(mse["combined"] <= best_other * 1.1, "{name}: {mse:?}");
     for row in c
         .rows
         .iter()
@@ -129,15 +133,22 @@ fn compare_on_glossy_plates() {
     }
     std::fs::write(dir.path().join("glossy-plates.mtl"), mtl).unwrap();
     let scene = vrpt::scene::load(dir.path()).unwrap();
+    let r = reference(&scene, 32, 24, 16384, 4);
     let mse = compare_presets(
         "glossy-plates",
         &scene,
+        &r,
         4,
-        16384,
         16,
         &["importance", "combined"],
     );
     assert!(mse["importance"] <= mse["independent"] / 5.0, "{mse:?}");
+    // the combination is within 10% of the best of the others (measured: 0.0053 against
+    // importance's 0.0105–0.0112, the best of the others, over 4 seeds)
+    let best_other = mse["independent"]
+        .min(mse["stratified"])
+        .min(mse["importance"]);
+    assert!(mse["combined"] <= best_other * 1.1, "{mse:?}");
 }
 
 /// Checker plane, 32×24, 64 spp (8×8 strata), K = 16 runs: each pixel is a pure 2D integral
@@ -151,8 +162,20 @@ fn compare_on_glossy_plates() {
 fn compare_on_checker_plane() {
     let scene = common::shipped("checker-plane");
     let all = ["independent", "stratified", "importance", "combined"];
-    let mse = compare_presets("checker-plane", &scene, 2, 65536, 64, &all);
+    let mse = compare_presets(
+        "checker-plane",
+        &scene,
+        checker_reference(&scene),
+        2,
+        64,
+        &all,
+    );
     assert!(mse["stratified"] <= mse["independent"] / 2.0, "{mse:?}");
+    // The plane is black (Kd = Ks = 0): every path ends on it, so the direction strategy cannot
+    // change the image; with the same sampler and seeds the images, hence the MSEs, are
+    // identical. This fails if choosing directions ever shifts the sampler's dimensions.
+    assert_eq!(mse["importance"], mse["independent"], "{mse:?}");
+    assert_eq!(mse["combined"], mse["stratified"], "{mse:?}");
 }
 
 /// `converge` on the checker plane at 4…1024 spp, 8 runs each. The slope of log MSE against
@@ -164,21 +187,20 @@ fn compare_on_checker_plane() {
 fn converge_slopes_on_checker_plane() {
     let scene = common::shipped("checker-plane");
     let (w, h, d) = (32, 24, 2);
-    let r = reference(&scene, w, h, 65536, d);
     let strategies = [
-        StrategySpec::parse("independent").unwrap(),
-        StrategySpec::parse("stratified").unwrap(),
+        Strategy::parse("independent").unwrap(),
+        Strategy::parse("stratified").unwrap(),
     ];
     let c = converge(
         &scene,
-        &r,
+        checker_reference(&scene),
         &strategies,
         &[4, 16, 64, 256, 1024],
         &settings(w, h, d, 8),
         &Silent,
     )
     .unwrap();
-    eprint!("{}", vrpt::cli::converge_table(&c));
+    eprint!("{}", c.table());
     let ind = c
         .slopes
         .iter()
@@ -209,7 +231,16 @@ fn as_image(scene: &Scene, s: &RenderSettings) -> RgbImage {
         height: s.height,
         pixels: film.mean_image(),
         variance: Some(film.variance_image()),
-        metadata: vrpt::cli::metadata(scene, s, &stats),
+        metadata: RenderMetadata::new(scene, s, &stats).to_attributes(),
+    }
+}
+
+/// A merge input made in memory, named `name`.
+fn input(name: &str, image: &RgbImage) -> MergeInput {
+    MergeInput {
+        path: PathBuf::from(name),
+        meta: RenderMetadata::from_attributes(&image.metadata).unwrap(),
+        image: image.clone(),
     }
 }
 
@@ -226,8 +257,10 @@ fn merge_of_two_halves_equals_one_render() {
             spp: 64,
             max_depth: 4,
             seed: 3,
-            sampler,
-            directions: Directions::Phong,
+            strategy: Strategy {
+                sampler,
+                ..Preset::Combined.strategy()
+            },
             ..Default::default()
         };
         // the stratified full render is two passes of 32, as the halves are
@@ -247,7 +280,7 @@ fn merge_of_two_halves_equals_one_render() {
                 height: 16,
                 pixels: f.mean_image(),
                 variance: Some(f.variance_image()),
-                metadata: vrpt::cli::metadata(&scene, &full, &st),
+                metadata: RenderMetadata::new(&scene, &full, &st).to_attributes(),
             }
         } else {
             as_image(&scene, &full)
@@ -267,7 +300,8 @@ fn merge_of_two_halves_equals_one_render() {
                 ..full.clone()
             },
         );
-        let m = merge(&[a.clone(), b.clone()], &["a".into(), "b".into()]).unwrap();
+        let (m, meta) = merge(&[input("a", &a), input("b", &b)]).unwrap();
+        assert_eq!(meta.spp, 64);
         assert_eq!(m.metadata["spp"], "64");
         let var = m.variance.as_ref().unwrap();
         let wvar = whole.variance.as_ref().unwrap();
@@ -286,10 +320,10 @@ fn merge_of_two_halves_equals_one_render() {
             }
         }
         // the same samples twice, or another max depth, are refused
-        assert!(merge(&[a.clone(), a.clone()], &["a".into(), "a".into()]).is_err());
+        assert!(merge(&[input("a", &a), input("a", &a)]).is_err());
         let mut other = b.clone();
         other.metadata.insert("max_depth".into(), "5".into());
-        let e = merge(&[a, other], &["a".into(), "b".into()]).unwrap_err();
+        let e = merge(&[input("a", &a), input("b", &other)]).unwrap_err();
         assert!(e.to_string().contains("max_depth"), "{e}");
     }
 }

@@ -7,10 +7,11 @@ use common::{icosphere_obj, render_quiet, write};
 use glam::{Vec2, Vec3};
 use rand::{rngs::SmallRng, Rng, SeedableRng};
 use vrpt::accel::Accel;
-use vrpt::material::Directions;
+use vrpt::bsdf::Directions;
 use vrpt::render::RenderSettings;
 use vrpt::sampler::SamplerKind;
 use vrpt::stats::{normal_critical_value, sidak};
+use vrpt::strategy::Strategy;
 
 fn random_unit(rng: &mut SmallRng) -> Vec3 {
     loop {
@@ -88,9 +89,11 @@ fn closest_hit_matches_brute_force() {
 /// the sphere has expected value exactly 0.8, whatever the direction strategy.
 ///
 /// Tolerance: the pixel mean minus 0.8 is (nearly) normal with the variance of the mean that the
-/// film measures; over P tested pixels × 3 channels × 3 strategies at family-wise 1e-3 the
-/// Šidák-corrected two-sided bound is z·σ. Add 1e-5 for f32 rounding (cosine sampling has zero
-/// variance here: every sample is exactly kd).
+/// film measures; over P tested pixels × 3 channels × 3 strategies × 2 samplers at family-wise
+/// 1e-3 the Šidák-corrected two-sided bound is z·σ. For the stratified sampler the film's
+/// variance (of independent samples) over-estimates the variance of the mean, which only makes
+/// the bound looser, never wrong. Add 1e-5 for f32 rounding (cosine sampling has zero variance
+/// here: every sample is exactly kd).
 #[test]
 fn white_furnace() {
     let dir = tempfile::tempdir().unwrap();
@@ -119,15 +122,15 @@ fn white_furnace() {
         })
         .collect();
     assert!(inside.len() > 150, "{} pixels see the sphere", inside.len());
-    let z = normal_critical_value(sidak(1e-3, inside.len() * 3 * 3));
-    for directions in [Directions::Uniform, Directions::Cosine, Directions::Phong] {
+    let z = normal_critical_value(sidak(1e-3, inside.len() * 3 * 3 * 2));
+    for strategy in Strategy::all() {
+        let directions = strategy.directions;
         let settings = RenderSettings {
             width: w,
             height: h,
             spp: 64,
             max_depth: 4,
-            sampler: SamplerKind::Independent,
-            directions,
+            strategy,
             seed: 3,
             ..Default::default()
         };
@@ -142,7 +145,7 @@ fn white_furnace() {
                 let err = (m[c] - 0.8).abs();
                 assert!(
                     err <= z * sd[c] + 1e-5,
-                    "{directions}: pixel ({x},{y}) = {} (σ {})",
+                    "{strategy}: pixel ({x},{y}) = {} (σ {})",
                     m[c],
                     sd[c]
                 );
@@ -153,7 +156,7 @@ fn white_furnace() {
             // uniform sampling is noisy here: the test must have had real variance to judge
             assert!(film.variance_of_mean(film.index(w / 2, h / 2)).x > 1e-5);
         }
-        eprintln!("furnace {directions}: worst |error|/σ = {worst:.2} (bound {z:.2})");
+        eprintln!("furnace {strategy}: worst |error|/σ = {worst:.2} (bound {z:.2})");
     }
 }
 
@@ -166,7 +169,10 @@ fn image_does_not_depend_on_thread_count() {
             height: 40,
             spp: 16,
             max_depth: 8,
-            sampler,
+            strategy: Strategy {
+                sampler,
+                ..Strategy::default()
+            },
             seed: 11,
             threads: Some(1),
             ..Default::default()
@@ -181,4 +187,77 @@ fn image_does_not_depend_on_thread_count() {
         let (c, _) = render_quiet(&scene, &settings);
         assert_ne!(a, c);
     }
+}
+
+/// A sample whose radiance is not finite is counted and dropped, never written into the image:
+/// a quad lit by an emitter of infinite radiance (built in memory: MTL input is validated)
+/// gives infinite samples wherever the emitter is seen or found.
+#[test]
+fn non_finite_samples_are_counted_and_dropped() {
+    use vrpt::material::Material;
+    use vrpt::scene::{Mesh, MeshTriangle, Scene, SceneOptions};
+    let quad = |y: f32, material: u32, up: bool| {
+        let (a, b, c, d) = (
+            Vec3::new(-1.0, y, -1.0),
+            Vec3::new(1.0, y, -1.0),
+            Vec3::new(1.0, y, 1.0),
+            Vec3::new(-1.0, y, 1.0),
+        );
+        let tris = if up {
+            [[a, d, c], [a, c, b]]
+        } else {
+            [[a, b, c], [a, c, d]]
+        };
+        tris.map(|p| MeshTriangle {
+            p,
+            normals: None,
+            uvs: None,
+            material,
+        })
+    };
+    let mut triangles = quad(0.0, 0, true).to_vec();
+    triangles.extend(quad(0.5, 1, false)); // the emitter above, facing down, half as wide
+    for t in triangles.iter_mut().skip(2) {
+        t.p = t.p.map(|p| Vec3::new(p.x * 0.5, p.y, p.z * 0.5));
+    }
+    let materials = vec![
+        Material::diffuse("floor", Vec3::splat(0.5)),
+        Material::new(
+            "inf",
+            Vec3::ZERO,
+            Vec3::ZERO,
+            1.0,
+            Vec3::splat(f32::INFINITY),
+        )
+        .0,
+    ];
+    let scene = Scene::build(
+        "inline".into(),
+        Mesh { triangles },
+        materials,
+        SceneOptions {
+            camera: Some(vrpt::camera::CameraDesc {
+                eye: Vec3::new(0.0, 3.0, 0.01),
+                target: Vec3::ZERO,
+                up: Vec3::Y,
+                fov_deg: 60.0,
+            }),
+            ..Default::default()
+        },
+        Vec::new(),
+    )
+    .unwrap();
+    let settings = RenderSettings {
+        width: 8,
+        height: 8,
+        spp: 16,
+        max_depth: 3,
+        ..Default::default()
+    };
+    let (film, stats) = render_quiet(&scene, &settings);
+    assert!(stats.nonfinite > 0, "no non-finite sample counted");
+    assert!(stats.nonfinite < stats.samples);
+    let counted: u64 = (0..film.len()).map(|i| film.count(i)).sum();
+    assert_eq!(counted + stats.nonfinite, stats.samples);
+    assert!(film.mean_image().iter().all(|p| p.is_finite()));
 }

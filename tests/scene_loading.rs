@@ -57,11 +57,11 @@ fn obj_with_mtl_loads_triangles_materials_and_emitters() {
     assert_eq!(shiny.exponent, 50.0);
     let lamp = s.materials.iter().find(|m| m.name == "lamp").unwrap();
     assert_eq!(lamp.emission, Vec3::new(10.0, 8.0, 6.0));
-    assert_eq!(s.emitters.len(), 1);
+    assert_eq!(s.lights.len(), 1);
     // the lamp triangle (0,1,0) (1,1,0) (0.5,2,0.5): area = |e1 × e2| / 2
     let e1 = Vec3::new(1.0, 0.0, 0.0);
     let e2 = Vec3::new(0.5, 1.0, 0.5);
-    assert!((s.emitters[0].area - 0.5 * e1.cross(e2).length()).abs() < 1e-6);
+    assert!((s.lights.triangles[0].area - 0.5 * e1.cross(e2).length()).abs() < 1e-6);
     assert!(s.warnings.iter().any(|w| w.contains("nosuchmaterial")));
     assert!(s
         .warnings
@@ -86,7 +86,7 @@ fn missing_mtl_falls_back_to_grey_with_a_warning() {
         .iter()
         .any(|w| w.contains("test.mtl") && w.contains("not found")));
     assert_eq!(s.materials.len(), 1);
-    assert!(s.emitters.is_empty());
+    assert!(s.lights.is_empty());
     // no emitters: a uniform white environment so the scene is visible
     assert_eq!(s.environment, Vec3::ONE);
 }
@@ -195,14 +195,14 @@ fn bad_input_gives_its_error() {
 fn shipped_scenes_load() {
     for name in ["cornell-box", "glossy-plates", "checker-plane"] {
         let s = common::shipped(name);
-        assert!(!s.emitters.is_empty(), "{name} has emitters");
+        assert!(!s.lights.is_empty(), "{name} has emitters");
         assert!(s.warnings.is_empty(), "{name}: {:?}", s.warnings);
     }
     let cb = common::shipped("cornell-box");
     assert_eq!(cb.triangle_count(), 32);
     assert_eq!(cb.defaults.spp, Some(64));
     // the light faces down: its triangles' normals point to -y
-    for e in &cb.emitters {
+    for e in &cb.lights.triangles {
         assert!(cb.shading[e.prim as usize].ng.y < -0.99);
     }
 }

@@ -41,11 +41,12 @@ mod common;
 
 use common::render_quiet;
 use std::path::Path;
-use vrpt::material::Directions;
+use vrpt::bsdf::Directions;
 use vrpt::render::RenderSettings;
 use vrpt::sampler::SamplerKind;
 use vrpt::scene::Scene;
 use vrpt::stats::{normal_critical_value, sidak};
+use vrpt::strategy::Strategy;
 
 fn check_all_combinations(name: &str, scene: &Scene, max_depth: u32) {
     let base = RenderSettings {
@@ -60,8 +61,10 @@ fn check_all_combinations(name: &str, scene: &Scene, max_depth: u32) {
             scene,
             &RenderSettings {
                 spp: 131072,
-                sampler,
-                directions,
+                strategy: Strategy {
+                    sampler,
+                    directions,
+                },
                 seed,
                 ..base.clone()
             },
@@ -85,8 +88,10 @@ fn check_all_combinations(name: &str, scene: &Scene, max_depth: u32) {
                 &ref_combined
             };
             let settings = RenderSettings {
-                sampler,
-                directions,
+                strategy: Strategy {
+                    sampler,
+                    directions,
+                },
                 seed,
                 ..base.clone()
             };

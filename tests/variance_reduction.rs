@@ -9,9 +9,11 @@
 
 use glam::{UVec2, Vec2, Vec3};
 use std::f64::consts::PI;
+use vrpt::analysis::fit::{log_log_slope, pearson};
+use vrpt::sampler::layout::{draw_dims, Dim, BOUNCE_DIMS, CAMERA_DIMS};
 use vrpt::sampler::{grid_shape, IndependentSampler, Sampler, StratifiedSampler};
 use vrpt::sampling::*;
-use vrpt::stats::{log_log_slope, normal_critical_value, pearson, sidak};
+use vrpt::stats::{normal_critical_value, sidak};
 
 fn pixels() -> Vec<UVec2> {
     vec![
@@ -22,24 +24,22 @@ fn pixels() -> Vec<UVec2> {
     ]
 }
 
-/// Dimension layout of the check: 1D, 2D, 1D, 2D, 2D, 1D.
-const LAYOUT: [usize; 6] = [1, 2, 1, 2, 2, 1];
+/// The renderer's dimension layout for a path of two bounces: camera 2D, then per bounce the
+/// bounce dimensions (1D, 2D, 1D).
+fn layout() -> Vec<Dim> {
+    let mut v = CAMERA_DIMS.to_vec();
+    v.extend(BOUNCE_DIMS);
+    v.extend(BOUNCE_DIMS);
+    v
+}
 
 /// All draws of one pixel: `draws[i][d]` = sample i's value in dimension d (1D values in x).
 fn draws<S: Sampler>(s: &mut S, pixel: UVec2, n: u32) -> Vec<Vec<Vec2>> {
+    let dims = layout();
     (0..n)
         .map(|i| {
             s.start_pixel_sample(pixel, i);
-            LAYOUT
-                .iter()
-                .map(|&k| {
-                    if k == 1 {
-                        Vec2::new(s.next_1d(), 0.0)
-                    } else {
-                        s.next_2d()
-                    }
-                })
-                .collect()
+            draw_dims(s, &dims)
         })
         .collect()
 }
@@ -53,15 +53,14 @@ fn every_stratum_holds_exactly_one_sample() {
             let mut s = StratifiedSampler::new(seed, n);
             for pixel in pixels() {
                 let d = draws(&mut s, pixel, n);
-                for (dim, &k) in LAYOUT.iter().enumerate() {
+                for (dim, k) in layout().iter().enumerate() {
                     let mut hit = vec![0u32; n as usize];
                     for sample in &d {
                         let u = sample[dim];
                         assert!(u.x >= 0.0 && u.x < 1.0 && u.y >= 0.0 && u.y < 1.0);
-                        let cell = if k == 1 {
-                            (u.x * n as f32) as u32
-                        } else {
-                            (u.y * b as f32) as u32 * a + (u.x * a as f32) as u32
+                        let cell = match k {
+                            Dim::One(_) => (u.x * n as f32) as u32,
+                            Dim::Two(_) => (u.y * b as f32) as u32 * a + (u.x * a as f32) as u32,
                         };
                         hit[cell as usize] += 1;
                     }
@@ -86,14 +85,7 @@ fn draws_do_not_depend_on_the_order_of_asking() {
         for i in (0..n).rev() {
             draws(&mut t, UVec2::new(9, 9), 3);
             t.start_pixel_sample(pixel, i);
-            for (dim, &k) in LAYOUT.iter().enumerate() {
-                let v = if k == 1 {
-                    Vec2::new(t.next_1d(), 0.0)
-                } else {
-                    t.next_2d()
-                };
-                assert_eq!(v, forward[i as usize][dim]);
-            }
+            assert_eq!(draw_dims(&mut t, &layout()), forward[i as usize]);
         }
         let mut ind = IndependentSampler::new(7);
         let f = draws(&mut ind, pixel, 8);
@@ -114,14 +106,15 @@ fn draws_do_not_depend_on_the_order_of_asking() {
 fn dimensions_are_uncorrelated() {
     let px: Vec<UVec2> = (0..64).map(|i| UVec2::new(i % 8, i / 8)).collect();
     let ns = [16u32, 64, 256];
-    // components: dims 0 (1D), 1x, 1y, 2 (1D), 3x, 3y
+    // components of the layout's first dimensions: pixel x, y (2D); lobe (1D); direction x, y
+    // (2D); roulette (1D)
     let comps: [(usize, bool); 6] = [
         (0, false),
+        (0, true),
         (1, false),
-        (1, true),
         (2, false),
+        (2, true),
         (3, false),
-        (3, true),
     ];
     let pairs = comps.len() * (comps.len() - 1) / 2;
     let z = normal_critical_value(sidak(0.01, pairs * ns.len()));

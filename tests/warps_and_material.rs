@@ -9,7 +9,8 @@
 
 use glam::{Vec2, Vec3};
 use rand::{rngs::SmallRng, Rng, SeedableRng};
-use vrpt::material::{Directions, Material};
+use vrpt::bsdf::Directions;
+use vrpt::material::Material;
 use vrpt::sampling::*;
 use vrpt::stats::{chi2_directions, sidak, Chi2Binning, Chi2Result};
 
@@ -115,7 +116,9 @@ fn cases() -> Vec<(f32, f32, f32, f32)> {
 fn material_sampling_fits_its_pdf_for_every_strategy() {
     let mut seed = 100;
     for (kd, ks, n, theta) in cases() {
-        let (m, _) = Material::new("m", Vec3::splat(kd), Vec3::splat(ks), n, Vec3::ZERO);
+        let m = Material::new("m", Vec3::splat(kd), Vec3::splat(ks), n, Vec3::ZERO)
+            .0
+            .bsdf();
         let wo = dir_at(theta, 20.0);
         for directions in [Directions::Uniform, Directions::Cosine, Directions::Phong] {
             seed += 1;
@@ -155,7 +158,9 @@ fn sample_agrees_with_eval_and_pdf() {
     let mut rng = SmallRng::seed_from_u64(5);
     let mut checked = 0;
     for (kd, ks, n, _) in cases() {
-        let (m, _) = Material::new("m", Vec3::splat(kd), Vec3::splat(ks), n, Vec3::ZERO);
+        let m = Material::new("m", Vec3::splat(kd), Vec3::splat(ks), n, Vec3::ZERO)
+            .0
+            .bsdf();
         for _ in 0..2000 {
             let wo = dir_at(rng.random_range(0.0..89.0), rng.random_range(0.0..360.0));
             let u = Vec2::new(rng.random(), rng.random());
@@ -173,7 +178,9 @@ fn sample_agrees_with_eval_and_pdf() {
     }
     assert!(checked > 20_000);
     // below the surface there is nothing
-    let (m, _) = Material::new("m", Vec3::splat(0.5), Vec3::splat(0.5), 10.0, Vec3::ZERO);
+    let m = Material::new("m", Vec3::splat(0.5), Vec3::splat(0.5), 10.0, Vec3::ZERO)
+        .0
+        .bsdf();
     assert_eq!(m.eval(Vec3::Z, -Vec3::Z), Vec3::ZERO);
     assert_eq!(m.pdf(Vec3::Z, -Vec3::Z, Directions::Phong), 0.0);
     assert!(m
@@ -192,7 +199,9 @@ fn albedo_is_at_most_one_and_one_at_normal_incidence() {
     let mut rng = SmallRng::seed_from_u64(9);
     for n in [1.0f32, 10.0, 100.0, 1000.0, 10000.0] {
         for kd in [0.0f32, 0.3, 0.7] {
-            let (m, _) = Material::new("m", Vec3::splat(kd), Vec3::splat(1.0 - kd), n, Vec3::ZERO);
+            let m = Material::new("m", Vec3::splat(kd), Vec3::splat(1.0 - kd), n, Vec3::ZERO)
+                .0
+                .bsdf();
             for theta in [0.0f32, 30.0, 60.0, 85.0] {
                 let wo = dir_at(theta, 0.0);
                 let (mut s, mut s2) = (0.0f64, 0.0f64);

@@ -9,87 +9,17 @@
 //!   stratified run is not stratified), the mean MSE and relMSE, and the least-squares slope of
 //!   `log MSE` against `log spp` (−1 for independent samples, steeper with stratification).
 
-use crate::analysis::metrics::{bias_test, metrics, variance_across_runs, Metrics};
+use crate::analysis::fit::log_log_slope;
+use crate::analysis::metrics::{bias_test, mean_variance, metrics, variance_across_runs, Metrics};
 use crate::error::{Error, Result};
 use crate::image_io::RgbImage;
-use crate::material::Directions;
-use crate::render::{render_passes, NoProgress, PassPlan, RenderSettings, Strategy};
-use crate::sampler::SamplerKind;
+use crate::output::RenderMetadata;
+use crate::render::{render_passes, with_threads, NoProgress, PassPlan, RenderSettings};
 use crate::scene::Scene;
-use crate::stats::log_log_slope;
+use crate::strategy::Strategy;
 use glam::Vec3;
+use std::path::Path;
 use std::time::Duration;
-
-/// A point of the (sampler, directions) grid, named by its preset where it has one.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub struct StrategySpec {
-    pub sampler: SamplerKind,
-    pub directions: Directions,
-}
-
-impl StrategySpec {
-    /// The preset's name (`combined`), or `sampler+directions` (`stratified+cosine`).
-    pub fn name(&self) -> String {
-        match Strategy::from_axes(self.sampler, self.directions) {
-            Some(s) => s.name().to_string(),
-            None => format!("{}+{}", self.sampler, self.directions),
-        }
-    }
-
-    /// Parse a preset name or `sampler+directions`.
-    pub fn parse(s: &str) -> std::result::Result<Self, String> {
-        let s = s.trim();
-        if let Some(p) = Strategy::ALL.into_iter().find(|p| p.name() == s) {
-            let (sampler, directions) = p.axes();
-            return Ok(StrategySpec {
-                sampler,
-                directions,
-            });
-        }
-        let (a, b) = s.split_once('+').ok_or_else(|| {
-            format!(
-                "unknown strategy '{s}': use independent, stratified, importance, combined, \
-                 or SAMPLER+DIRECTIONS (e.g. stratified+cosine)"
-            )
-        })?;
-        let sampler = SamplerKind::from_name(a.trim())
-            .ok_or_else(|| format!("unknown sampler '{a}' in '{s}' (independent, stratified)"))?;
-        let directions = Directions::from_name(b.trim())
-            .ok_or_else(|| format!("unknown directions '{b}' in '{s}' (uniform, cosine, phong)"))?;
-        Ok(StrategySpec {
-            sampler,
-            directions,
-        })
-    }
-
-    /// The four presets.
-    pub fn presets() -> Vec<StrategySpec> {
-        Strategy::ALL
-            .into_iter()
-            .map(|p| {
-                let (sampler, directions) = p.axes();
-                StrategySpec {
-                    sampler,
-                    directions,
-                }
-            })
-            .collect()
-    }
-
-    /// All six (sampler, directions) pairs.
-    pub fn all_pairs() -> Vec<StrategySpec> {
-        let mut v = Vec::new();
-        for sampler in [SamplerKind::Independent, SamplerKind::Stratified] {
-            for directions in [Directions::Uniform, Directions::Cosine, Directions::Phong] {
-                v.push(StrategySpec {
-                    sampler,
-                    directions,
-                });
-            }
-        }
-        v
-    }
-}
 
 /// What every experiment needs besides the strategies.
 #[derive(Clone, Debug, PartialEq)]
@@ -109,18 +39,46 @@ pub trait ExperimentProgress: Sync {
     fn finished(&self, label: &str, weight: u64);
 }
 
-impl ExperimentProgress for indicatif::ProgressBar {
-    fn finished(&self, label: &str, weight: u64) {
-        self.set_message(label.to_string());
-        self.inc(weight);
-    }
-}
-
 /// No progress reporting.
 pub struct Silent;
 
 impl ExperimentProgress for Silent {
     fn finished(&self, _: &str, _: u64) {}
+}
+
+impl ExperimentSettings {
+    /// Settings that match `reference` (read from `path`): its size, and its max depth where it
+    /// records one (else the scene's default, else the renderer's). The reference is checked
+    /// against the scene with [`check_reference`].
+    pub fn for_reference(
+        scene: &Scene,
+        reference: &RgbImage,
+        path: &Path,
+        seed: u64,
+        runs: u32,
+        threads: Option<usize>,
+    ) -> Result<ExperimentSettings> {
+        let meta = RenderMetadata::from_image(reference, path)?;
+        let max_depth = meta.as_ref().map_or_else(
+            || {
+                scene
+                    .defaults
+                    .max_depth
+                    .unwrap_or(RenderSettings::default().max_depth)
+            },
+            |m| m.max_depth,
+        );
+        let s = ExperimentSettings {
+            width: reference.width,
+            height: reference.height,
+            max_depth,
+            seed,
+            runs,
+            threads,
+        };
+        check_reference(scene, reference, &s)?;
+        Ok(s)
+    }
 }
 
 /// Check that `reference` fits the scene and settings: same size, and, where the reference
@@ -133,22 +91,22 @@ pub fn check_reference(scene: &Scene, reference: &RgbImage, s: &ExperimentSettin
             reference.width, reference.height, s.width, s.height
         )));
     }
-    if let Some(h) = reference.metadata.get("scene_hash") {
-        if *h != format!("{:016x}", scene.hash) {
-            return Err(err(format!(
-                "made from another version of the scene (scene hash {h}, the scene is {:016x}): \
-                 render the reference again",
-                scene.hash
-            )));
-        }
+    let Some(meta) = RenderMetadata::from_image(reference, Path::new("reference"))? else {
+        return Ok(());
+    };
+    if meta.scene_hash != scene.hash {
+        return Err(err(format!(
+            "made from another version of the scene (scene hash {}, the scene is {:016x}): \
+             render the reference again",
+            meta.scene_hash_hex(),
+            scene.hash
+        )));
     }
-    if let Some(d) = reference.metadata.get("max_depth") {
-        if *d != s.max_depth.to_string() {
-            return Err(err(format!(
-                "rendered with max depth {d}, the experiment uses {}",
-                s.max_depth
-            )));
-        }
+    if meta.max_depth != s.max_depth {
+        return Err(err(format!(
+            "rendered with max depth {}, the experiment uses {}",
+            meta.max_depth, s.max_depth
+        )));
     }
     Ok(())
 }
@@ -196,7 +154,7 @@ fn mean_of<T>(v: &[T], f: impl Fn(&T) -> f64) -> f64 {
 pub fn compare(
     scene: &Scene,
     reference: &RgbImage,
-    strategies: &[StrategySpec],
+    strategies: &[Strategy],
     spp: u32,
     equal_time: Option<Duration>,
     s: &ExperimentSettings,
@@ -208,74 +166,72 @@ pub fn compare(
             "compare needs at least one strategy, 2 runs and 1 spp".into(),
         ));
     }
-    warm_up(scene, s)?;
-    let mut rows = Vec::new();
-    let mut images = Vec::new();
-    for st in strategies {
-        let mut runs: Vec<Vec<Vec3>> = Vec::new();
-        let (mut secs, mut spps, mut ms) = (Vec::new(), Vec::new(), Vec::<Metrics>::new());
-        for k in 0..s.runs {
-            let max_spp = if equal_time.is_some() {
-                u32::MAX / 2
-            } else {
-                spp
-            };
-            let settings = run_settings(st, s, max_spp, k);
-            let plan = PassPlan {
-                pass_spp: Some(spp),
-                time_limit: equal_time,
-            };
-            let (film, stats, reached) = render_passes(scene, &settings, &plan, &NoProgress)?;
-            let img = film.mean_image();
-            ms.push(metrics(&img, &reference.pixels));
-            secs.push(stats.elapsed.as_secs_f64());
-            spps.push(reached as f64);
-            runs.push(img);
-            progress.finished(&format!("{} run {}/{}", st.name(), k + 1, s.runs), 1);
+    // one thread pool for the whole job: no run pays for starting one
+    with_threads(s.threads, || -> Result<Comparison> {
+        warm_up(scene, s)?;
+        let mut rows = Vec::new();
+        let mut images = Vec::new();
+        for st in strategies {
+            let mut runs: Vec<Vec<Vec3>> = Vec::new();
+            let (mut secs, mut spps, mut ms) = (Vec::new(), Vec::new(), Vec::<Metrics>::new());
+            for k in 0..s.runs {
+                let max_spp = if equal_time.is_some() {
+                    u32::MAX / 2
+                } else {
+                    spp
+                };
+                let settings = run_settings(st, s, max_spp, k);
+                let plan = PassPlan {
+                    pass_spp: Some(spp),
+                    time_limit: equal_time,
+                };
+                let (film, stats, reached) = render_passes(scene, &settings, &plan, &NoProgress)?;
+                let img = film.mean_image();
+                ms.push(metrics(&img, &reference.pixels));
+                secs.push(stats.elapsed.as_secs_f64());
+                spps.push(reached as f64);
+                runs.push(img);
+                progress.finished(&format!("{st} run {}/{}", k + 1, s.runs), 1);
+            }
+            let bias = bias_test(&runs, &reference.pixels);
+            rows.push(CompareRow {
+                strategy: st.to_string(),
+                runs: s.runs,
+                spp: mean_of(&spps, |x| *x),
+                seconds: mean_of(&secs, |x| *x),
+                mse: mean_of(&ms, |m| m.mse),
+                rel_mse: mean_of(&ms, |m| m.rel_mse),
+                rmse: mean_of(&ms, |m| m.rmse),
+                mae: mean_of(&ms, |m| m.mae),
+                variance: variance_across_runs(&runs),
+                bias_t: bias.t,
+                bias_p: bias.p,
+                mse_reduction: 1.0,
+                efficiency: 1.0,
+            });
+            images.push(runs.swap_remove(0));
         }
-        let bias = bias_test(&runs, &reference.pixels);
-        rows.push(CompareRow {
-            strategy: st.name(),
-            runs: s.runs,
-            spp: mean_of(&spps, |x| *x),
-            seconds: mean_of(&secs, |x| *x),
-            mse: mean_of(&ms, |m| m.mse),
-            rel_mse: mean_of(&ms, |m| m.rel_mse),
-            rmse: mean_of(&ms, |m| m.rmse),
-            mae: mean_of(&ms, |m| m.mae),
-            variance: variance_across_runs(&runs),
-            bias_t: bias.t,
-            bias_p: bias.p,
-            mse_reduction: 1.0,
-            efficiency: 1.0,
-        });
-        images.push(runs.swap_remove(0));
-    }
-    let base = rows
-        .iter()
-        .position(|r| r.strategy == "independent")
-        .unwrap_or(0);
-    let (base_mse, base_t) = (rows[base].mse, rows[base].seconds);
-    for r in &mut rows {
-        r.mse_reduction = base_mse / r.mse;
-        r.efficiency = (base_mse * base_t) / (r.mse * r.seconds);
-    }
-    let reference_variance = reference.variance.as_ref().map(|v| {
-        v.iter()
-            .map(|p| (p.x + p.y + p.z) as f64 / 3.0)
-            .sum::<f64>()
-            / v.len() as f64
-    });
-    Ok(Comparison {
-        baseline: rows[base].strategy.clone(),
-        rows,
-        images,
-        reference_variance,
-    })
+        let base = rows
+            .iter()
+            .position(|r| r.strategy == "independent")
+            .unwrap_or(0);
+        let (base_mse, base_t) = (rows[base].mse, rows[base].seconds);
+        for r in &mut rows {
+            r.mse_reduction = base_mse / r.mse;
+            r.efficiency = (base_mse * base_t) / (r.mse * r.seconds);
+        }
+        let reference_variance = reference.variance.as_deref().map(mean_variance);
+        Ok(Comparison {
+            baseline: rows[base].strategy.clone(),
+            rows,
+            images,
+            reference_variance,
+        })
+    })?
 }
 
-/// The render settings of run `k` of strategy `st`.
-fn run_settings(st: &StrategySpec, s: &ExperimentSettings, spp: u32, k: u32) -> RenderSettings {
+/// The render settings of run `k` of strategy `st`, on the job's thread pool.
+fn run_settings(st: &Strategy, s: &ExperimentSettings, spp: u32, k: u32) -> RenderSettings {
     RenderSettings {
         width: s.width,
         height: s.height,
@@ -283,9 +239,8 @@ fn run_settings(st: &StrategySpec, s: &ExperimentSettings, spp: u32, k: u32) -> 
         first_sample: 0,
         max_depth: s.max_depth,
         seed: s.seed + k as u64,
-        sampler: st.sampler,
-        directions: st.directions,
-        threads: s.threads,
+        strategy: *st,
+        threads: None,
     }
 }
 
@@ -297,7 +252,6 @@ fn warm_up(scene: &Scene, s: &ExperimentSettings) -> Result<()> {
         height: s.height.min(16),
         spp: 1,
         max_depth: s.max_depth,
-        threads: s.threads,
         ..RenderSettings::default()
     };
     render_passes(scene, &settings, &PassPlan::default(), &NoProgress).map(|_| ())
@@ -334,75 +288,134 @@ pub struct ConvergeSlope {
 pub fn converge(
     scene: &Scene,
     reference: &RgbImage,
-    strategies: &[StrategySpec],
+    strategies: &[Strategy],
     spps: &[u32],
     s: &ExperimentSettings,
     progress: &dyn ExperimentProgress,
 ) -> Result<Convergence> {
     check_reference(scene, reference, s)?;
-    warm_up(scene, s)?;
     if strategies.is_empty() || spps.len() < 2 || s.runs < 1 || spps.contains(&0) {
         return Err(Error::Settings(
             "converge needs at least one strategy, two spp values ≥ 1 and one run".into(),
         ));
     }
-    let mut points = Vec::new();
-    let mut slopes = Vec::new();
-    for st in strategies {
-        let mut xs = Vec::new();
-        let (mut ys, mut rs) = (Vec::new(), Vec::new());
-        for &spp in spps {
-            let (mut mse, mut rel, mut secs) = (0.0, 0.0, 0.0);
-            for k in 0..s.runs {
-                let settings = run_settings(st, s, spp, k);
-                let (film, stats, _) =
-                    render_passes(scene, &settings, &PassPlan::default(), &NoProgress)?;
-                let m = metrics(&film.mean_image(), &reference.pixels);
-                mse += m.mse;
-                rel += m.rel_mse;
-                secs += stats.elapsed.as_secs_f64();
-                progress.finished(
-                    &format!("{} spp {spp} run {}/{}", st.name(), k + 1, s.runs),
-                    spp as u64,
-                );
+    with_threads(s.threads, || -> Result<Convergence> {
+        warm_up(scene, s)?;
+        let mut points = Vec::new();
+        let mut slopes = Vec::new();
+        for st in strategies {
+            let mut xs = Vec::new();
+            let (mut ys, mut rs) = (Vec::new(), Vec::new());
+            for &spp in spps {
+                let (mut mse, mut rel, mut secs) = (0.0, 0.0, 0.0);
+                for k in 0..s.runs {
+                    let settings = run_settings(st, s, spp, k);
+                    let (film, stats, _) =
+                        render_passes(scene, &settings, &PassPlan::default(), &NoProgress)?;
+                    let m = metrics(&film.mean_image(), &reference.pixels);
+                    mse += m.mse;
+                    rel += m.rel_mse;
+                    secs += stats.elapsed.as_secs_f64();
+                    progress.finished(
+                        &format!("{st} spp {spp} run {}/{}", k + 1, s.runs),
+                        spp as u64,
+                    );
+                }
+                let k = s.runs as f64;
+                points.push(ConvergePoint {
+                    strategy: st.to_string(),
+                    spp,
+                    mse: mse / k,
+                    rel_mse: rel / k,
+                    seconds: secs / k,
+                });
+                xs.push(spp as f64);
+                ys.push(mse / k);
+                rs.push(rel / k);
             }
-            let k = s.runs as f64;
-            points.push(ConvergePoint {
-                strategy: st.name(),
-                spp,
-                mse: mse / k,
-                rel_mse: rel / k,
-                seconds: secs / k,
+            slopes.push(ConvergeSlope {
+                strategy: st.to_string(),
+                mse_slope: log_log_slope(&xs, &ys),
+                rel_mse_slope: log_log_slope(&xs, &rs),
             });
-            xs.push(spp as f64);
-            ys.push(mse / k);
-            rs.push(rel / k);
         }
-        slopes.push(ConvergeSlope {
-            strategy: st.name(),
-            mse_slope: log_log_slope(&xs, &ys),
-            rel_mse_slope: log_log_slope(&xs, &rs),
-        });
-    }
-    Ok(Convergence { points, slopes })
+        Ok(Convergence { points, slopes })
+    })?
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn strategy_names_round_trip() {
-        for s in StrategySpec::all_pairs() {
-            assert_eq!(StrategySpec::parse(&s.name()).unwrap(), s);
-        }
-        assert_eq!(StrategySpec::parse("combined").unwrap().name(), "combined");
-        assert_eq!(
-            StrategySpec::parse("stratified+cosine").unwrap().name(),
-            "stratified+cosine"
+impl Comparison {
+    /// The comparison as a table (what `vrpt compare` prints).
+    pub fn table(&self) -> String {
+        let mut s = format!(
+            "{:<22} {:>7} {:>9} {:>11} {:>11} {:>11} {:>8} {:>8} {:>10} {:>10}\n",
+            "strategy",
+            "spp",
+            "time s",
+            "MSE",
+            "relMSE",
+            "variance",
+            "bias t",
+            "bias p",
+            "MSE red.",
+            "efficiency"
         );
-        assert!(StrategySpec::parse("sobol+phong").is_err());
-        assert!(StrategySpec::parse("best").is_err());
-        assert_eq!(StrategySpec::presets().len(), 4);
+        for r in &self.rows {
+            s += &format!(
+                "{:<22} {:>7.1} {:>9.3} {:>11.4e} {:>11.4e} {:>11.4e} {:>+8.2} {:>8.3} {:>9.2}x {:>9.2}x\n",
+                r.strategy, r.spp, r.seconds, r.mse, r.rel_mse, r.variance, r.bias_t, r.bias_p, r.mse_reduction, r.efficiency
+            );
+        }
+        s += &format!(
+            "(MSE reduction and efficiency 1/(MSE·time) relative to {}; means over {} runs",
+            self.baseline,
+            self.rows.first().map_or(0, |r| r.runs)
+        );
+        if let Some(v) = self.reference_variance {
+            s += &format!("; the reference's own variance, {v:.3e}, is a floor under every MSE");
+        }
+        s += ")\n";
+        s
     }
+}
+
+impl Convergence {
+    /// The sweep as a table of points and slopes (what `vrpt converge` prints).
+    pub fn table(&self) -> String {
+        let mut s = format!(
+            "{:<22} {:>7} {:>11} {:>11} {:>9}\n",
+            "strategy", "spp", "MSE", "relMSE", "time s"
+        );
+        for p in &self.points {
+            s += &format!(
+                "{:<22} {:>7} {:>11.4e} {:>11.4e} {:>9.3}\n",
+                p.strategy, p.spp, p.mse, p.rel_mse, p.seconds
+            );
+        }
+        s += "fitted slopes of log error against log spp:\n";
+        for sl in &self.slopes {
+            s += &format!(
+                "{:<22} MSE {:+.3}   relMSE {:+.3}\n",
+                sl.strategy, sl.mse_slope, sl.rel_mse_slope
+            );
+        }
+        s
+    }
+}
+
+/// Write `rows` as CSV (a header from the field names, one line per row) to `path`, through a
+/// temporary file.
+pub fn write_csv<T: serde::Serialize>(path: &Path, rows: &[T]) -> Result<()> {
+    let err = |e: csv::Error| Error::Write {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    };
+    let mut w = csv::Writer::from_writer(Vec::new());
+    for r in rows {
+        w.serialize(r).map_err(err)?;
+    }
+    let bytes = w.into_inner().map_err(|e| Error::Write {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    })?;
+    crate::image_io::write_bytes(path, &bytes)
 }

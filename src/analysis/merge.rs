@@ -7,63 +7,74 @@
 
 use crate::error::{Error, Result};
 use crate::image_io::RgbImage;
+use crate::output::RenderMetadata;
 use glam::{DVec3, Vec3};
-use std::collections::BTreeMap;
+use std::path::PathBuf;
 
-/// Keys that must agree for renders to be merged.
-pub const MUST_MATCH: [&str; 6] = [
-    "scene_hash",
-    "width",
-    "height",
-    "max_depth",
-    "sampler",
-    "directions",
-];
+/// One input of a merge: the image, its file (for messages) and its metadata.
+pub struct MergeInput {
+    pub path: PathBuf,
+    pub image: RgbImage,
+    pub meta: RenderMetadata,
+}
 
-/// Merge `inputs` (named by `names`, for messages) into one image.
-pub fn merge(inputs: &[RgbImage], names: &[String]) -> Result<RgbImage> {
+impl MergeInput {
+    /// An input read from `path`: it must be a vrpt render whose metadata fits its pixels.
+    pub fn read(path: &std::path::Path) -> Result<MergeInput> {
+        let image = crate::image_io::read_exr(path)?;
+        let meta = RenderMetadata::require(&image, path)?;
+        Ok(MergeInput {
+            path: path.to_path_buf(),
+            image,
+            meta,
+        })
+    }
+}
+
+/// Merge `inputs` into one image and its metadata.
+pub fn merge(inputs: &[MergeInput]) -> Result<(RgbImage, RenderMetadata)> {
     if inputs.len() < 2 {
         return Err(Error::Settings("merge needs at least two images".into()));
     }
-    let bad = |i: usize, m: String| Error::Settings(format!("{}: {m}", names[i]));
-    let first = &inputs[0];
-    let mut spp = Vec::new();
-    let mut ranges: Vec<(String, u64, u64)> = Vec::new();
-    for (i, img) in inputs.iter().enumerate() {
-        for key in MUST_MATCH.iter().chain(["spp", "seed"].iter()) {
-            if !img.metadata.contains_key(*key) {
-                return Err(bad(
-                    i,
-                    format!("no '{key}' in its metadata: not a vrpt render"),
-                ));
-            }
+    let bad = |i: usize, m: String| Error::Settings(format!("{}: {m}", inputs[i].path.display()));
+    let first = &inputs[0].meta;
+    let mut ranges: Vec<(u64, u64, u64)> = Vec::new();
+    for (i, input) in inputs.iter().enumerate() {
+        let m = &input.meta;
+        let differs = [
+            ("scene_hash", m.scene_hash != first.scene_hash),
+            ("size", (m.width, m.height) != (first.width, first.height)),
+            ("max_depth", m.max_depth != first.max_depth),
+            ("sampler", m.strategy.sampler != first.strategy.sampler),
+            (
+                "directions",
+                m.strategy.directions != first.strategy.directions,
+            ),
+        ];
+        if let Some((key, _)) = differs.iter().find(|(_, d)| *d) {
+            let a = m.to_attributes();
+            let b = first.to_attributes();
+            let show = |x: &std::collections::BTreeMap<String, String>| match *key {
+                "size" => format!("{}×{}", x["width"], x["height"]),
+                k => x[k].clone(),
+            };
+            return Err(bad(
+                i,
+                format!(
+                    "{key} is {} but {} has {}: only renders of the same scene and settings merge",
+                    show(&a),
+                    inputs[0].path.display(),
+                    show(&b)
+                ),
+            ));
         }
-        for key in MUST_MATCH {
-            if img.metadata[key] != first.metadata[key] {
-                return Err(bad(
-                    i,
-                    format!(
-                        "{key} is {} but {} has {}: only renders of the same scene and settings merge",
-                        img.metadata[key], names[0], first.metadata[key]
-                    ),
-                ));
-            }
-        }
-        let n: u64 = img.metadata["spp"]
-            .parse()
-            .map_err(|_| bad(i, "spp is not a number".into()))?;
-        let start: u64 = img
-            .metadata
-            .get("first_sample")
-            .map_or(Ok(0), |s| s.parse())
-            .map_err(|_| bad(i, "first_sample is not a number".into()))?;
-        let seed = img.metadata["seed"].clone();
-        if seed == "merged" {
+        let Some(seed) = m.seed else {
             return Err(bad(
                 i,
                 "is itself a merge; merge the original renders".into(),
             ));
-        }
+        };
+        let (start, n) = (m.first_sample, m.spp);
         if let Some((_, a, b)) = ranges
             .iter()
             .find(|(s, a, b)| *s == seed && start < *b && start + n > *a)
@@ -74,19 +85,18 @@ pub fn merge(inputs: &[RgbImage], names: &[String]) -> Result<RgbImage> {
             ));
         }
         ranges.push((seed, start, start + n));
-        spp.push(n);
     }
-    let total: u64 = spp.iter().sum();
-    let with_var = inputs.iter().all(|i| i.variance.is_some());
-    let px = first.pixels.len();
+    let total: u64 = inputs.iter().map(|i| i.meta.spp).sum();
+    let with_var = inputs.iter().all(|i| i.image.variance.is_some());
+    let px = inputs[0].image.pixels.len();
     let mut pixels = vec![Vec3::ZERO; px];
     let mut variance = with_var.then(|| vec![Vec3::ZERO; px]);
     for p in 0..px {
         let (mut sum, mut sum_sq) = (DVec3::ZERO, DVec3::ZERO);
-        for (img, &n) in inputs.iter().zip(&spp) {
-            let (m, n) = (img.pixels[p].as_dvec3(), n as f64);
+        for input in inputs {
+            let (m, n) = (input.image.pixels[p].as_dvec3(), input.meta.spp as f64);
             sum += m * n;
-            if let Some(v) = &img.variance {
+            if let Some(v) = &input.image.variance {
                 sum_sq += v[p].as_dvec3() * n * (n - 1.0) + m * m * n;
             }
         }
@@ -103,29 +113,28 @@ pub fn merge(inputs: &[RgbImage], names: &[String]) -> Result<RgbImage> {
             };
         }
     }
-    let mut metadata: BTreeMap<String, String> = MUST_MATCH
+    let names: Vec<String> = inputs
         .iter()
-        .map(|k| (k.to_string(), first.metadata[*k].clone()))
+        .map(|i| i.path.display().to_string())
         .collect();
-    for key in ["scene", "strategy"] {
-        if let Some(v) = first.metadata.get(key) {
-            metadata.insert(key.into(), v.clone());
-        }
-    }
-    metadata.insert("spp".into(), total.to_string());
-    metadata.insert("seed".into(), "merged".into());
-    metadata.insert("first_sample".into(), "0".into());
-    metadata.insert("merged_from".into(), names.join(", "));
-    let seconds: f64 = inputs
-        .iter()
-        .filter_map(|i| i.metadata.get("render_seconds")?.parse::<f64>().ok())
-        .sum();
-    metadata.insert("render_seconds".into(), format!("{seconds:.6}"));
-    Ok(RgbImage {
+    let meta = RenderMetadata {
+        spp: total,
+        seed: None,
+        first_sample: 0,
+        merged_from: Some(names.join(", ")),
+        render_seconds: inputs.iter().map(|i| i.meta.render_seconds).sum(),
+        nonfinite_samples: inputs.iter().map(|i| i.meta.nonfinite_samples).sum(),
+        pass_spp: None,
+        time_limit_seconds: None,
+        image: None,
+        ..first.clone()
+    };
+    let image = RgbImage {
         width: first.width,
         height: first.height,
         pixels,
         variance,
-        metadata,
-    })
+        metadata: meta.to_attributes(),
+    };
+    Ok((image, meta))
 }

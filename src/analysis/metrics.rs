@@ -152,6 +152,44 @@ pub fn bias_z_scores(
         .collect()
 }
 
+/// The bias of a whole image against a reference, from the variances of both means.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct ImageBias {
+    /// `Σ(m − r) / √Σ(v_m + v_r)` over all pixels and channels: standard normal for an
+    /// unbiased image whose pixel errors are independent (`None` without variance).
+    pub z: Option<f64>,
+    /// The largest per-pixel, per-channel `|z|` of [`bias_z_scores`].
+    pub max_pixel_z: f64,
+}
+
+/// The image-level bias z and the largest per-pixel |z| of `mean` (with the variance of each
+/// pixel's mean) against `reference` (with its own, if known).
+pub fn image_bias(
+    mean: &[Vec3],
+    mean_variance: &[Vec3],
+    reference: &[Vec3],
+    reference_variance: Option<&[Vec3]>,
+) -> ImageBias {
+    let z = bias_z_scores(mean, mean_variance, reference, reference_variance);
+    let (mut sum_d, mut sum_v, mut max_z) = (0.0f64, 0.0f64, 0.0f64);
+    for i in 0..mean.len() {
+        for c in 0..3 {
+            sum_d += (mean[i][c] - reference[i][c]) as f64;
+            sum_v += (mean_variance[i][c] + reference_variance.map_or(0.0, |rv| rv[i][c])) as f64;
+            max_z = max_z.max((z[i][c] as f64).abs());
+        }
+    }
+    ImageBias {
+        z: (sum_v > 0.0).then(|| sum_d / sum_v.sqrt()),
+        max_pixel_z: max_z,
+    }
+}
+
+/// The mean of the per-pixel variances (over pixels and channels).
+pub fn mean_variance(v: &[Vec3]) -> f64 {
+    v.iter().map(|p| (p.x + p.y + p.z) as f64).sum::<f64>() / (3 * v.len().max(1)) as f64
+}
+
 /// A perceptually ordered colour map (a 5-stop approximation of viridis), `t ∈ [0, 1]`.
 pub fn colormap(t: f64) -> [u8; 3] {
     const STOPS: [[f64; 3]; 5] = [
@@ -229,6 +267,16 @@ mod tests {
             Some(&[Vec3::ONE]),
         );
         assert!((z[0].x - 0.5).abs() < 1e-6);
+        // two pixels off by +1 with variance 1 + 1 each: z = 6 / √12 per image
+        let b = image_bias(
+            &[Vec3::splat(2.0); 2],
+            &[Vec3::ONE; 2],
+            &[Vec3::ONE; 2],
+            Some(&[Vec3::ONE; 2]),
+        );
+        assert!((b.z.unwrap() - 6.0 / 12f64.sqrt()).abs() < 1e-9);
+        assert!((b.max_pixel_z - 0.5f64.sqrt()).abs() < 1e-6);
+        assert!((mean_variance(&[Vec3::new(1.0, 2.0, 3.0)]) - 2.0).abs() < 1e-12);
     }
 
     #[test]

@@ -5,9 +5,11 @@
 //! - [`experiments`]: `compare` (strategies at equal spp or equal time, over K runs) and
 //!   `converge` (error against spp, each spp rendered from scratch, with fitted slopes);
 //! - [`merge`]: renders made in pieces combined exactly into one reference;
+//! - [`fit`]: least-squares lines and log-log slopes;
 //! - [`plots`]: log-log convergence plots (SVG/PNG) and labelled image grids (PNG).
 
 pub mod experiments;
+pub mod fit;
 pub mod merge;
 pub mod metrics;
 pub mod plots;

@@ -3,10 +3,10 @@
 //! false-colour error maps. Drawn with plotters; text uses the Hack font shipped as bytes by
 //! `epaint_default_fonts` (no system fonts needed), registered as "sans-serif".
 
-use crate::analysis::experiments::Convergence;
-use crate::analysis::metrics::false_colour;
+use crate::analysis::experiments::{Comparison, Convergence};
+use crate::analysis::metrics::{false_colour, relative_error_map};
 use crate::error::{Error, Result};
-use crate::image_io::{tonemap, write_bytes, write_png_rgb8, Format};
+use crate::image_io::{tonemap, write_bytes, write_png_rgb8, Format, RgbImage};
 use glam::Vec3;
 use plotters::prelude::*;
 use std::path::Path;
@@ -133,6 +133,50 @@ pub fn write_convergence_plot(path: &Path, c: &Convergence, title: &str) -> Resu
         .map_err(|m| draw_err(path, m))?;
         write_png_rgb8(path, size.0, size.1, &buf)
     }
+}
+
+/// Write the false-colour map of `image`'s per-pixel relative squared error against
+/// `reference` (same size) as a PNG; returns the range of its log colour scale.
+pub fn write_error_map(path: &Path, image: &RgbImage, reference: &RgbImage) -> Result<(f64, f64)> {
+    let map = relative_error_map(&image.pixels, &reference.pixels);
+    let (lo, hi) = error_scale(&[&map]);
+    let rgb: Vec<u8> = false_colour(&map, lo, hi).into_iter().flatten().collect();
+    write_png_rgb8(path, image.width, image.height, &rgb)?;
+    Ok((lo, hi))
+}
+
+/// Write a comparison's grid: per strategy its first run's image (tone-mapped with
+/// `exposure`) and error map against `reference`.
+pub fn write_comparison_grid(
+    path: &Path,
+    c: &Comparison,
+    reference: &RgbImage,
+    exposure: f32,
+) -> Result<()> {
+    let maps: Vec<Vec<f64>> = c
+        .images
+        .iter()
+        .map(|img| relative_error_map(img, &reference.pixels))
+        .collect();
+    let rows: Vec<GridRow> = c
+        .rows
+        .iter()
+        .zip(&c.images)
+        .zip(&maps)
+        .map(|((r, img), m)| GridRow {
+            label: format!("{}  {:.0} spp  MSE {:.2e}", r.strategy, r.spp, r.mse),
+            image: img,
+            error: m,
+        })
+        .collect();
+    write_image_grid(
+        path,
+        reference.width,
+        reference.height,
+        &rows,
+        exposure,
+        "rel. error² (log)",
+    )
 }
 
 /// One row of an image grid: a label, an image and its per-pixel error map.

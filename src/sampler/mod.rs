@@ -1,13 +1,13 @@
 //! Samplers: where the points `u ∈ [0,1)^d` that feed every random decision come from.
 //!
-//! A path sample consumes dimensions in a fixed order (pixel position 2D, then per bounce: lobe
-//! choice 1D, direction 2D, Russian roulette 1D), each `next_*` call advancing to the next
-//! dimension. Every draw is a pure function of (seed, pixel, sample index, dimension), so the
+//! A path sample consumes dimensions in the fixed order of [`layout`], each `next_*` call
+//! advancing to the next dimension. Every draw is a pure function of (seed, pixel, sample index, dimension), so the
 //! image does not depend on the number of threads or on the order in which tiles are rendered.
 //! Hot loops are generic over [`Sampler`]; the kind is chosen once, with a `match` on
 //! [`SamplerKind`].
 
 mod independent;
+pub mod layout;
 mod stratified;
 
 pub use independent::IndependentSampler;
@@ -39,25 +39,8 @@ pub enum SamplerKind {
     Stratified,
 }
 
-impl SamplerKind {
-    /// The name used on the command line and in metadata.
-    pub fn name(self) -> &'static str {
-        match self {
-            SamplerKind::Independent => "independent",
-            SamplerKind::Stratified => "stratified",
-        }
-    }
-
-    /// Parse the name written by [`SamplerKind::name`].
-    pub fn from_name(s: &str) -> Option<Self> {
-        [SamplerKind::Independent, SamplerKind::Stratified]
-            .into_iter()
-            .find(|k| k.name() == s)
-    }
-}
-
 impl std::fmt::Display for SamplerKind {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
+        f.write_str(&crate::strategy::value_name(self))
     }
 }

@@ -13,12 +13,14 @@ pub mod generate;
 pub mod obj;
 
 use crate::accel::{Accel, Hit};
+use crate::bsdf::Bsdf;
 use crate::camera::CameraDesc;
 use crate::error::{Error, Result};
+use crate::lights::Lights;
 use crate::material::Material;
 use crate::math::hash_words;
 use description::{Description, RenderSection};
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use std::path::{Path, PathBuf};
 
 /// One triangle of a mesh before the BVH is built.
@@ -27,6 +29,8 @@ pub struct MeshTriangle {
     pub p: [Vec3; 3],
     /// Per-vertex shading normals, if the file has them.
     pub normals: Option<[Vec3; 3]>,
+    /// Per-vertex texture coordinates, if the file has them.
+    pub uvs: Option<[Vec2; 3]>,
     pub material: u32,
 }
 
@@ -42,15 +46,9 @@ pub struct TriShading {
     pub normals: [Vec3; 3],
     /// Unit geometric normal by winding.
     pub ng: Vec3,
+    /// Texture coordinates of the vertices (zero where the file has none).
+    pub uvs: [Vec2; 3],
     pub material: u32,
-}
-
-/// An emissive triangle (for light sampling and statistics).
-#[derive(Clone, Copy, Debug)]
-pub struct Emitter {
-    /// BVH-order triangle index.
-    pub prim: u32,
-    pub area: f32,
 }
 
 /// The local geometry at a ray hit.
@@ -61,6 +59,8 @@ pub struct SurfacePoint {
     pub ng: Vec3,
     /// Unit interpolated shading normal, on the same side as `ng`.
     pub ns: Vec3,
+    /// Interpolated texture coordinates (zero where the mesh has none).
+    pub uv: Vec2,
     pub material: u32,
 }
 
@@ -71,13 +71,13 @@ pub struct Scene {
     pub accel: Accel,
     pub shading: Vec<TriShading>,
     pub materials: Vec<Material>,
-    pub emitters: Vec<Emitter>,
+    /// The emissive triangles, and which primitive is which light.
+    pub lights: Lights,
     pub camera: CameraDesc,
     /// Radiance of rays that escape.
     pub environment: Vec3,
     /// Defaults from `scene.toml` (flags override them).
     pub defaults: RenderSection,
-    pub bounds: (Vec3, Vec3),
     /// Origin offset along the geometric normal for spawned rays, scaled to the scene.
     pub ray_epsilon: f32,
     /// Things the user should hear about (missing materials, scaled materials, …).
@@ -138,24 +138,14 @@ impl Scene {
                 TriShading {
                     normals,
                     ng,
+                    uvs: t.uvs.unwrap_or([Vec2::ZERO; 3]),
                     material: t.material,
                 }
             })
             .collect();
-        let emitters: Vec<Emitter> = shading
-            .iter()
-            .enumerate()
-            .filter(|(_, s)| materials[s.material as usize].is_emissive())
-            .map(|(i, _)| {
-                let [a, b, c] = accel.vertices(i as u32);
-                Emitter {
-                    prim: i as u32,
-                    area: 0.5 * (b - a).cross(c - a).length(),
-                }
-            })
-            .collect();
+        let lights = Lights::build(&accel, &shading, &materials);
         let environment = options.environment.unwrap_or_else(|| {
-            if emitters.is_empty() {
+            if lights.is_empty() {
                 warnings.push("no emitters: lighting with a uniform white environment".into());
                 Vec3::ONE
             } else {
@@ -174,11 +164,10 @@ impl Scene {
             accel,
             shading,
             materials,
-            emitters,
+            lights,
             camera,
             environment,
             defaults: options.defaults,
-            bounds: (lo, hi),
             ray_epsilon: 1e-5 * extent.max(1e-3),
             warnings,
             hash,
@@ -206,8 +195,21 @@ impl Scene {
             p,
             ng: sh.ng,
             ns,
+            uv: sh.uvs[0] * b0 + sh.uvs[1] * hit.b1 + sh.uvs[2] * hit.b2,
             material: sh.material,
         }
+    }
+
+    /// The BSDF at a surface point: the one place where a texture would enter.
+    #[inline]
+    pub fn bsdf_at(&self, s: &SurfacePoint) -> Bsdf {
+        self.materials[s.material as usize].bsdf()
+    }
+
+    /// The material at a surface point.
+    #[inline]
+    pub fn material_at(&self, s: &SurfacePoint) -> &Material {
+        &self.materials[s.material as usize]
     }
 }
 

@@ -9,7 +9,7 @@
 use super::{Mesh, MeshTriangle};
 use crate::error::{Error, Result};
 use crate::material::Material;
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
@@ -94,6 +94,12 @@ pub fn load_obj(path: &Path) -> Result<(Mesh, Vec<Material>, Vec<String>)> {
             )
         };
         let has_normals = mesh.normals.len() == mesh.positions.len();
+        let has_uvs =
+            !mesh.texcoords.is_empty() && mesh.texcoords.len() / 2 == mesh.positions.len() / 3;
+        let uv = |i: u32| {
+            let i = i as usize * 2;
+            Vec2::new(mesh.texcoords[i], mesh.texcoords[i + 1])
+        };
         let nrm = |i: u32| {
             let i = i as usize * 3;
             Vec3::new(mesh.normals[i], mesh.normals[i + 1], mesh.normals[i + 2])
@@ -118,9 +124,11 @@ pub fn load_obj(path: &Path) -> Result<(Mesh, Vec<Material>, Vec<String>)> {
             } else {
                 None
             };
+            let uvs = has_uvs.then(|| [uv(f[0]), uv(f[1]), uv(f[2])]);
             triangles.push(MeshTriangle {
                 p,
                 normals,
+                uvs,
                 material,
             });
         }

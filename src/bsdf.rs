@@ -1,0 +1,182 @@
+//! The BSDF at a surface point: the modified Phong model (Lafortune & Willems 1994), energy
+//! conserving:
+//!
+//! `f(wo, wi) = kd/π + ks·(n+2)/(2π)·cosⁿα`, with `α` the angle between `wi` and the mirror
+//! direction of `wo` (and `cosα` clamped at 0).
+//!
+//! A [`Bsdf`] is built per hit by `Scene::bsdf_at` from the [`crate::material::Material`] the
+//! MTL describes, so that textures later change that one function.
+//!
+//! Conventions: all directions are in the local shading frame (z = shading normal, flipped by the
+//! caller to the side of `wo`); `wo` points away from the surface toward the viewer, `wi` away
+//! from the surface toward the next vertex; `f` does NOT include the cosine (the integrator
+//! multiplies by `cosθi`); pdfs are per unit solid angle. Random numbers come in as arguments.
+//!
+//! How the direction is chosen is the second axis of variance reduction ([`Directions`]):
+//! - `uniform`: uniform hemisphere, `p = 1/(2π)`;
+//! - `cosine`: `p = cosθ/π`, importance sampling of the diffuse term;
+//! - `phong`: the diffuse lobe (cosine) with probability `P_d = avg(kd)/(avg(kd)+avg(ks))`, else
+//!   the specular lobe `(n+1)/(2π) cosⁿα` about the mirror direction; the weight uses the
+//!   mixture pdf `P_d cosθ/π + (1−P_d)(n+1)/(2π) cosⁿα` of both lobes (one-sample MIS with the
+//!   balance heuristic). A specular direction that falls below the surface is a failed sample
+//!   (`None`, zero contribution) and the mixture pdf is NOT renormalized over the hemisphere:
+//!   the estimator `f cosθ / p · 1[wi above]` still has expectation `∫_{H+} f cosθ dω`, because
+//!   `p` is the true density of the directions that are above — the lost mass only ever
+//!   contributed zero. So it stays unbiased.
+
+use crate::math::{average, reflect_local, Frame};
+use crate::sampling::{
+    cosine_hemisphere_pdf, phong_lobe_pdf, sample_cosine_hemisphere, sample_phong_lobe,
+    sample_uniform_hemisphere, uniform_hemisphere_pdf,
+};
+use glam::{Vec2, Vec3};
+use std::f32::consts::FRAC_1_PI;
+
+/// How bounce directions are chosen (the `--directions` flag).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum)]
+pub enum Directions {
+    /// Uniform on the hemisphere, p = 1/(2π): the naive baseline.
+    Uniform,
+    /// Cosine-weighted, p = cosθ/π: importance sampling of the diffuse term.
+    Cosine,
+    /// Diffuse or Phong lobe by their albedos, weighted by the mixture pdf.
+    #[default]
+    Phong,
+}
+
+impl std::fmt::Display for Directions {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&crate::strategy::value_name(self))
+    }
+}
+
+/// One sampled direction with everything the integrator needs.
+#[derive(Clone, Copy, Debug)]
+pub struct BsdfSample {
+    /// The sampled direction, local frame, `wi.z > 0`.
+    pub wi: Vec3,
+    /// `f(wo, wi)`, without the cosine.
+    pub f: Vec3,
+    /// The pdf of `wi` under the strategy used, per unit solid angle.
+    pub pdf: f32,
+}
+
+/// The modified Phong BSDF at one surface point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Bsdf {
+    /// Diffuse reflectance.
+    pub kd: Vec3,
+    /// Specular reflectance.
+    pub ks: Vec3,
+    /// Phong exponent.
+    pub exponent: f32,
+    /// Probability of choosing the diffuse lobe in `phong` sampling.
+    p_diffuse: f32,
+}
+
+impl Bsdf {
+    /// A BSDF of reflectances `kd`, `ks` (taken as they are: the caller keeps `kd + ks ≤ 1`) and
+    /// Phong exponent `exponent ≥ 0`.
+    #[inline]
+    pub fn new(kd: Vec3, ks: Vec3, exponent: f32) -> Bsdf {
+        let (ad, as_) = (average(kd), average(ks));
+        let p_diffuse = if ad + as_ > 0.0 { ad / (ad + as_) } else { 1.0 };
+        Bsdf {
+            kd,
+            ks,
+            exponent,
+            p_diffuse,
+        }
+    }
+
+    /// True when the BSDF reflects nothing (paths end on it).
+    #[inline]
+    pub fn is_black(&self) -> bool {
+        self.kd.max_element() <= 0.0 && self.ks.max_element() <= 0.0
+    }
+
+    /// `cosα` between `wi` and the mirror direction of `wo`.
+    #[inline]
+    fn cos_alpha(wo: Vec3, wi: Vec3) -> f32 {
+        reflect_local(wo).dot(wi)
+    }
+
+    /// `f(wo, wi)` (no cosine); zero unless both directions are above the surface.
+    #[inline]
+    pub fn eval(&self, wo: Vec3, wi: Vec3) -> Vec3 {
+        if wo.z <= 0.0 || wi.z <= 0.0 {
+            return Vec3::ZERO;
+        }
+        let mut f = self.kd * FRAC_1_PI;
+        if self.ks.max_element() > 0.0 {
+            let ca = Self::cos_alpha(wo, wi);
+            if ca > 0.0 {
+                f += self.ks * ((self.exponent + 2.0) * (0.5 * FRAC_1_PI) * ca.powf(self.exponent));
+            }
+        }
+        f
+    }
+
+    /// The pdf with which [`Bsdf::sample`] returns `wi`, per unit solid angle.
+    #[inline]
+    pub fn pdf(&self, wo: Vec3, wi: Vec3, directions: Directions) -> f32 {
+        if wo.z <= 0.0 || wi.z <= 0.0 || self.is_black() {
+            return 0.0;
+        }
+        match directions {
+            Directions::Uniform => uniform_hemisphere_pdf(),
+            Directions::Cosine => cosine_hemisphere_pdf(wi.z),
+            Directions::Phong => self.mixture_pdf(wo, wi),
+        }
+    }
+
+    #[inline]
+    fn mixture_pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        let pd = self.p_diffuse;
+        let mut p = pd * cosine_hemisphere_pdf(wi.z);
+        if pd < 1.0 {
+            p += (1.0 - pd) * phong_lobe_pdf(self.exponent, Self::cos_alpha(wo, wi));
+        }
+        p
+    }
+
+    /// Sample `wi` given `wo` with the chosen strategy; `u_lobe` picks the lobe (used by `phong`
+    /// only), `u` places the direction. `None` when the sample is below the surface or the
+    /// BSDF is black: the path ends with zero contribution.
+    #[inline]
+    pub fn sample(
+        &self,
+        wo: Vec3,
+        u_lobe: f32,
+        u: Vec2,
+        directions: Directions,
+    ) -> Option<BsdfSample> {
+        if wo.z <= 0.0 || self.is_black() {
+            return None;
+        }
+        let wi = match directions {
+            Directions::Uniform => sample_uniform_hemisphere(u),
+            Directions::Cosine => sample_cosine_hemisphere(u),
+            Directions::Phong => {
+                if u_lobe < self.p_diffuse {
+                    sample_cosine_hemisphere(u)
+                } else {
+                    let local = sample_phong_lobe(self.exponent, u);
+                    Frame::from_normal(reflect_local(wo)).to_world(local)
+                }
+            }
+        };
+        if wi.z <= 0.0 {
+            return None;
+        }
+        let pdf = self.pdf(wo, wi, directions);
+        if pdf <= 0.0 || !pdf.is_finite() {
+            return None;
+        }
+        Some(BsdfSample {
+            wi,
+            f: self.eval(wo, wi),
+            pdf,
+        })
+    }
+}

@@ -1,0 +1,300 @@
+//! A render's outputs: the typed metadata every EXR records ([`RenderMetadata`]), and writing
+//! the image (EXR with the variance channels, or PNG) plus an optional variance-only EXR.
+//!
+//! Metadata is stored as EXR string attributes `vrpt.KEY` (see [`crate::image_io`]); this module
+//! is the one place that knows the keys. Reading is strict: a vrpt image must carry every
+//! required key with a well-formed value, and its recorded size must be its real size, so
+//! `merge`, `diff`, `compare` and `converge` never index pixels by a claimed size.
+
+use crate::error::{Error, Result};
+use crate::film::Film;
+use crate::image_io::{write_exr, write_png, Format, RgbImage};
+use crate::render::{RenderSettings, RenderStats};
+use crate::scene::Scene;
+use crate::strategy::{parse_value, value_name, Strategy};
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// What vrpt records about how an image was made.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderMetadata {
+    /// The scene file, as given.
+    pub scene: String,
+    /// Hash of everything in the scene that determines the image.
+    pub scene_hash: u64,
+    pub width: u32,
+    pub height: u32,
+    /// Samples per pixel (summed over the inputs of a merge).
+    pub spp: u64,
+    /// Index of the first sample.
+    pub first_sample: u64,
+    /// The seed; `None` for a merge of several renders.
+    pub seed: Option<u64>,
+    pub strategy: Strategy,
+    pub max_depth: u32,
+    /// Wall time of the render (summed over the inputs of a merge).
+    pub render_seconds: f64,
+    /// Samples dropped because their radiance was not finite.
+    pub nonfinite_samples: u64,
+    /// Samples per pixel per pass, when rendered in passes.
+    pub pass_spp: Option<u32>,
+    /// The `--time-limit` the render ran under.
+    pub time_limit_seconds: Option<f64>,
+    /// The inputs of a merge.
+    pub merged_from: Option<String>,
+    /// What the pixels are, when not the radiance (e.g. "variance of the mean").
+    pub image: Option<String>,
+}
+
+impl RenderMetadata {
+    /// The metadata of a render of `scene` with `settings` (whose `spp` is the spp reached).
+    pub fn new(scene: &Scene, settings: &RenderSettings, stats: &RenderStats) -> Self {
+        RenderMetadata {
+            scene: scene.source.display().to_string(),
+            scene_hash: scene.hash,
+            width: settings.width,
+            height: settings.height,
+            spp: settings.spp as u64,
+            first_sample: settings.first_sample as u64,
+            seed: Some(settings.seed),
+            strategy: settings.strategy,
+            max_depth: settings.max_depth,
+            render_seconds: stats.elapsed.as_secs_f64(),
+            nonfinite_samples: stats.nonfinite,
+            pass_spp: None,
+            time_limit_seconds: None,
+            merged_from: None,
+            image: None,
+        }
+    }
+
+    /// The scene hash as written: 16 hex digits.
+    pub fn scene_hash_hex(&self) -> String {
+        format!("{:016x}", self.scene_hash)
+    }
+
+    /// As string attributes (keys without the `vrpt.` prefix).
+    pub fn to_attributes(&self) -> BTreeMap<String, String> {
+        let mut m = BTreeMap::new();
+        let mut put = |k: &str, v: String| {
+            m.insert(k.to_string(), v);
+        };
+        put("scene", self.scene.clone());
+        put("scene_hash", self.scene_hash_hex());
+        put("width", self.width.to_string());
+        put("height", self.height.to_string());
+        put("spp", self.spp.to_string());
+        put("first_sample", self.first_sample.to_string());
+        put(
+            "seed",
+            self.seed.map_or_else(|| "merged".into(), |s| s.to_string()),
+        );
+        put("sampler", value_name(&self.strategy.sampler));
+        put("directions", value_name(&self.strategy.directions));
+        put("strategy", self.strategy.to_string());
+        put("max_depth", self.max_depth.to_string());
+        put("render_seconds", format!("{:.6}", self.render_seconds));
+        put("nonfinite_samples", self.nonfinite_samples.to_string());
+        if let Some(p) = self.pass_spp {
+            put("pass_spp", p.to_string());
+        }
+        if let Some(t) = self.time_limit_seconds {
+            put("time_limit_seconds", t.to_string());
+        }
+        if let Some(f) = &self.merged_from {
+            put("merged_from", f.clone());
+        }
+        if let Some(i) = &self.image {
+            put("image", i.clone());
+        }
+        m
+    }
+
+    /// Parse attributes written by [`RenderMetadata::to_attributes`]; the error names the key.
+    pub fn from_attributes(a: &BTreeMap<String, String>) -> std::result::Result<Self, String> {
+        fn req<'a>(
+            a: &'a BTreeMap<String, String>,
+            k: &str,
+        ) -> std::result::Result<&'a str, String> {
+            a.get(k)
+                .map(String::as_str)
+                .ok_or_else(|| format!("no '{k}' in its metadata: not a vrpt render"))
+        }
+        fn num<T: std::str::FromStr>(k: &str, v: &str) -> std::result::Result<T, String> {
+            v.trim()
+                .parse()
+                .map_err(|_| format!("metadata '{k}' is '{v}', not a valid number"))
+        }
+        fn opt<T: std::str::FromStr>(
+            a: &BTreeMap<String, String>,
+            k: &str,
+        ) -> std::result::Result<Option<T>, String> {
+            a.get(k).map(|v| num(k, v)).transpose()
+        }
+        let hash = req(a, "scene_hash")?;
+        let scene_hash = u64::from_str_radix(hash, 16)
+            .map_err(|_| format!("metadata 'scene_hash' is '{hash}', not 16 hex digits"))?;
+        let seed = match req(a, "seed")? {
+            "merged" => None,
+            s => Some(num("seed", s)?),
+        };
+        let render_seconds: f64 = opt(a, "render_seconds")?.unwrap_or(0.0);
+        let time_limit_seconds: Option<f64> = opt(a, "time_limit_seconds")?;
+        if !render_seconds.is_finite() || time_limit_seconds.is_some_and(|t| !t.is_finite()) {
+            return Err("metadata times must be finite".into());
+        }
+        Ok(RenderMetadata {
+            scene: a.get("scene").cloned().unwrap_or_default(),
+            scene_hash,
+            width: num("width", req(a, "width")?)?,
+            height: num("height", req(a, "height")?)?,
+            spp: num("spp", req(a, "spp")?)?,
+            first_sample: opt(a, "first_sample")?.unwrap_or(0),
+            seed,
+            strategy: Strategy {
+                sampler: parse_value(req(a, "sampler")?, "sampler")?,
+                directions: parse_value(req(a, "directions")?, "directions")?,
+            },
+            max_depth: num("max_depth", req(a, "max_depth")?)?,
+            render_seconds,
+            nonfinite_samples: opt(a, "nonfinite_samples")?.unwrap_or(0),
+            pass_spp: opt(a, "pass_spp")?,
+            time_limit_seconds,
+            merged_from: a.get("merged_from").cloned(),
+            image: a.get("image").cloned(),
+        })
+    }
+
+    /// The metadata of an image read from `path`: `None` when it carries no vrpt metadata at all
+    /// (an image made elsewhere), an error when it is malformed or its recorded size is not the
+    /// image's real size.
+    pub fn from_image(img: &RgbImage, path: &Path) -> Result<Option<Self>> {
+        if img.metadata.is_empty() {
+            return Ok(None);
+        }
+        let err = |message: String| Error::ImageRead {
+            path: path.to_path_buf(),
+            message,
+        };
+        let m = Self::from_attributes(&img.metadata).map_err(err)?;
+        if (m.width, m.height) != (img.width, img.height) {
+            return Err(err(format!(
+                "its metadata says {}×{} but the image is {}×{}",
+                m.width, m.height, img.width, img.height
+            )));
+        }
+        Ok(Some(m))
+    }
+
+    /// Like [`RenderMetadata::from_image`], but the metadata must be there.
+    pub fn require(img: &RgbImage, path: &Path) -> Result<Self> {
+        Self::from_image(img, path)?.ok_or_else(|| Error::ImageRead {
+            path: path.to_path_buf(),
+            message: "no vrpt metadata: not a vrpt render".into(),
+        })
+    }
+}
+
+/// Write a render: `output` as EXR (mean, variance-of-the-mean channels, metadata) or PNG
+/// (tone-mapped with `exposure` stops); and, if asked, the variance of the mean alone to the EXR
+/// `variance`. Every file is written to a temporary file and renamed.
+pub fn write_render(
+    output: &Path,
+    film: &Film,
+    meta: &RenderMetadata,
+    exposure: f32,
+    variance: Option<&Path>,
+) -> Result<()> {
+    let attributes = meta.to_attributes();
+    let mean = film.mean_image();
+    let var = film.variance_image();
+    match Format::from_path(output)? {
+        Format::Exr => write_exr(
+            output,
+            film.width,
+            film.height,
+            &mean,
+            Some(&var),
+            &attributes,
+        )?,
+        Format::Png => write_png(output, film.width, film.height, &mean, exposure)?,
+    }
+    if let Some(v) = variance {
+        let vmeta = RenderMetadata {
+            image: Some("variance of the mean".into()),
+            ..meta.clone()
+        };
+        write_exr(
+            v,
+            film.width,
+            film.height,
+            &var,
+            None,
+            &vmeta.to_attributes(),
+        )?;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::strategy::Preset;
+
+    #[test]
+    fn attributes_round_trip_and_errors_name_the_key() {
+        let m = RenderMetadata {
+            scene: "scenes/x".into(),
+            scene_hash: 0xdead_beef_0123_4567,
+            width: 4,
+            height: 3,
+            spp: 64,
+            first_sample: 32,
+            seed: Some(9),
+            strategy: Preset::Importance.strategy(),
+            max_depth: 5,
+            render_seconds: 1.5,
+            nonfinite_samples: 2,
+            pass_spp: Some(16),
+            time_limit_seconds: Some(0.5),
+            merged_from: None,
+            image: None,
+        };
+        let a = m.to_attributes();
+        assert_eq!(a["strategy"], "importance");
+        assert_eq!(RenderMetadata::from_attributes(&a).unwrap(), m);
+        let merged = RenderMetadata {
+            seed: None,
+            ..m.clone()
+        };
+        assert_eq!(
+            RenderMetadata::from_attributes(&merged.to_attributes()).unwrap(),
+            merged
+        );
+        let mut bad = a.clone();
+        bad.insert("spp".into(), "many".into());
+        assert!(RenderMetadata::from_attributes(&bad)
+            .unwrap_err()
+            .contains("'spp'"));
+        bad = a.clone();
+        bad.remove("max_depth");
+        assert!(RenderMetadata::from_attributes(&bad)
+            .unwrap_err()
+            .contains("'max_depth'"));
+        bad = a.clone();
+        bad.insert("sampler".into(), "nosuch".into());
+        assert!(RenderMetadata::from_attributes(&bad)
+            .unwrap_err()
+            .contains("sampler"));
+        // a recorded size that is not the image's is refused
+        let img = RgbImage {
+            width: 2,
+            height: 3,
+            pixels: vec![glam::Vec3::ZERO; 6],
+            variance: None,
+            metadata: a,
+        };
+        let e = RenderMetadata::from_image(&img, Path::new("x.exr")).unwrap_err();
+        assert!(e.to_string().contains("4×3"), "{e}");
+    }
+}

@@ -1,0 +1,110 @@
+//! The random-dimension layout of a path sample, named once: which decision each dimension of
+//! the sampler feeds. A path sample draws
+//!
+//! | dimensions | decision |
+//! |---|---|
+//! | [`CAMERA_DIMS`] | the point in the pixel (2D) |
+//! | [`BOUNCE_DIMS`], at every vertex after the camera | lobe choice (1D), direction (2D), Russian roulette (1D) |
+//!
+//! Every bounce draws all of its dimensions, used or not, so a dimension index means the same
+//! decision in every sample — what stratification needs. [`CameraSample::draw`] and
+//! [`BounceSample::draw`] are the only code that draws them; tests and benchmarks walk the same
+//! tables.
+
+use super::Sampler;
+use glam::Vec2;
+
+/// One dimension of the layout: its size and what it decides.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Dim {
+    One(&'static str),
+    Two(&'static str),
+}
+
+/// The camera sample's dimensions.
+pub const CAMERA_DIMS: [Dim; 1] = [Dim::Two("pixel position")];
+
+/// The dimensions of every bounce, in the order they are drawn.
+pub const BOUNCE_DIMS: [Dim; 3] = [
+    Dim::One("lobe choice"),
+    Dim::Two("direction"),
+    Dim::One("russian roulette"),
+];
+
+/// The numbers of the camera ray.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CameraSample {
+    /// Position inside the pixel, `[0,1)²`.
+    pub pixel: Vec2,
+}
+
+impl CameraSample {
+    /// Draw [`CAMERA_DIMS`].
+    #[inline]
+    pub fn draw<S: Sampler>(s: &mut S) -> Self {
+        CameraSample { pixel: s.next_2d() }
+    }
+}
+
+/// The numbers of one bounce.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BounceSample {
+    /// Picks the lobe of the Phong mixture.
+    pub lobe: f32,
+    /// Places the direction within the lobe.
+    pub direction: Vec2,
+    /// Decides Russian roulette.
+    pub roulette: f32,
+}
+
+impl BounceSample {
+    /// Draw [`BOUNCE_DIMS`], in their order.
+    #[inline]
+    pub fn draw<S: Sampler>(s: &mut S) -> Self {
+        let lobe = s.next_1d();
+        let direction = s.next_2d();
+        let roulette = s.next_1d();
+        BounceSample {
+            lobe,
+            direction,
+            roulette,
+        }
+    }
+}
+
+/// Draw one value per dimension of `dims` (a 1D value in `x`, `y = 0`): how tests and benchmarks
+/// walk the layout without knowing what each dimension decides.
+pub fn draw_dims<S: Sampler>(s: &mut S, dims: &[Dim]) -> Vec<Vec2> {
+    dims.iter()
+        .map(|d| match d {
+            Dim::One(_) => Vec2::new(s.next_1d(), 0.0),
+            Dim::Two(_) => s.next_2d(),
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampler::StratifiedSampler;
+    use glam::UVec2;
+
+    /// The structs draw exactly what the tables say.
+    #[test]
+    fn structs_follow_the_tables() {
+        let mut a = StratifiedSampler::new(3, 16);
+        let mut b = a.clone();
+        for i in 0..16 {
+            a.start_pixel_sample(UVec2::new(1, 2), i);
+            b.start_pixel_sample(UVec2::new(1, 2), i);
+            let c = CameraSample::draw(&mut a);
+            let bo = BounceSample::draw(&mut a);
+            let dims: Vec<Dim> = CAMERA_DIMS.iter().chain(&BOUNCE_DIMS).copied().collect();
+            let v = draw_dims(&mut b, &dims);
+            assert_eq!(v[0], c.pixel);
+            assert_eq!(v[1].x, bo.lobe);
+            assert_eq!(v[2], bo.direction);
+            assert_eq!(v[3].x, bo.roulette);
+        }
+    }
+}
