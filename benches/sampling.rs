@@ -23,7 +23,7 @@ fn draw_path<S: Sampler>(s: &mut S) -> f32 {
         s.start_pixel_sample(UVec2::new(7, 3), i);
         acc += CameraSample::draw(s).pixel.x;
         for _ in 0..BOUNCES {
-            let b = BounceSample::draw(s);
+            let b = BounceSample::draw(s, true);
             acc += b.lobe + b.direction.y + b.roulette;
         }
     }

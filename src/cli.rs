@@ -10,11 +10,12 @@ use vrpt::analysis::experiments::{
     compare, converge, write_csv, ExperimentProgress, ExperimentSettings, Silent,
 };
 use vrpt::analysis::merge::{merge, MergeInput};
-use vrpt::analysis::metrics::{image_bias, mean_variance, metrics};
+use vrpt::analysis::metrics::{image_bias, mean_variance, metrics, region_metrics, Region};
 use vrpt::analysis::plots::{write_comparison_grid, write_convergence_plot, write_error_map};
 use vrpt::bsdf::Directions;
 use vrpt::error::{Error, Result};
 use vrpt::image_io::{check_image_path, check_writable, read_exr, write_bytes, write_exr, Format};
+use vrpt::lights::LightStrategy;
 use vrpt::output::{write_render, RenderMetadata};
 use vrpt::render::{render_passes, NoProgress, PassPlan, Progress, RenderSettings};
 use vrpt::sampler::SamplerKind;
@@ -46,12 +47,14 @@ pub enum Command {
     Converge(ConvergeArgs),
 }
 
-/// How points and directions are sampled: a preset, or the axes separately.
+/// How points, directions and lights are sampled: a preset, or the axes separately.
 #[derive(Debug, Clone, Args)]
 pub struct StrategyArgs {
-    /// Named strategy: independent (= independent + uniform), stratified (= stratified +
-    /// uniform), importance (= independent + phong), combined (= stratified + phong). Cannot
-    /// be combined with a --sampler or --directions that disagrees with it.
+    /// Named strategy (SAMPLER/DIRECTIONS/LIGHTS): independent = independent/uniform/bsdf,
+    /// stratified = stratified/uniform/bsdf, importance = independent/phong/bsdf, combined =
+    /// stratified/phong/bsdf, nee = stratified/phong/nee, mis = stratified/phong/mis (the
+    /// default). Cannot be combined with a --sampler, --directions or --lights that disagrees
+    /// with it.
     #[arg(long, value_enum)]
     pub strategy: Option<Preset>,
     /// Where sample points come from: independent (i.i.d. uniform) or stratified (jittered
@@ -63,6 +66,11 @@ pub struct StrategyArgs {
     /// phong (diffuse/Phong lobes by albedo, mixture pdf). Default: phong.
     #[arg(long, value_enum)]
     pub directions: Option<Directions>,
+    /// How light is found at each vertex: bsdf (only when a sampled ray hits an emitter), nee
+    /// (sample a light and trace a shadow ray at every vertex) or mis (both, weighted by the
+    /// power heuristic). Default: mis.
+    #[arg(long, value_enum)]
+    pub lights: Option<LightStrategy>,
 }
 
 impl StrategyArgs {
@@ -73,6 +81,7 @@ impl StrategyArgs {
             return Ok(Strategy {
                 sampler: self.sampler.unwrap_or(d.sampler),
                 directions: self.directions.unwrap_or(d.directions),
+                lights: self.lights.unwrap_or(d.lights),
             });
         };
         let st = preset.strategy();
@@ -90,6 +99,9 @@ impl StrategyArgs {
                 st.directions.to_string(),
                 x.to_string(),
             ));
+        }
+        if let Some(x) = self.lights.filter(|&x| x != st.lights) {
+            return Err(conflict("lights", st.lights.to_string(), x.to_string()));
         }
         Ok(st)
     }
@@ -193,6 +205,37 @@ pub struct MergeArgs {
     pub output: PathBuf,
 }
 
+/// Parts of the image to report on their own.
+#[derive(Debug, Clone, Args)]
+pub struct RegionArgs {
+    /// A region whose metrics are also reported on their own: X,Y,W,H in pixels (rows from the
+    /// top), or NAME=X,Y,W,H. May be given several times.
+    #[arg(long, value_name = "X,Y,W,H", value_parser = Region::parse)]
+    pub region: Vec<Region>,
+    /// A file of named regions, one `NAME X,Y,W,H` per line (`#` starts a comment), e.g.
+    /// scenes/glossy-plates/regions.txt.
+    #[arg(long, value_name = "FILE")]
+    pub regions: Option<PathBuf>,
+}
+
+impl RegionArgs {
+    /// The regions of the flags and the file, checked against a `width × height` image.
+    fn resolve(&self, width: u32, height: u32) -> Result<Vec<Region>> {
+        let mut all = self.region.clone();
+        if let Some(p) = &self.regions {
+            let text = vrpt::error::read_text(p)?;
+            all.extend(Region::parse_list(&text).map_err(|message| Error::Scene {
+                path: p.clone(),
+                message,
+            })?);
+        }
+        for r in &all {
+            r.check(width, height).map_err(Error::Settings)?;
+        }
+        Ok(all)
+    }
+}
+
 /// `vrpt diff`.
 #[derive(Debug, Clone, Args)]
 pub struct DiffArgs {
@@ -203,6 +246,8 @@ pub struct DiffArgs {
     /// Write a false-colour map of the per-pixel relative squared error to this PNG.
     #[arg(long, value_name = "PNG")]
     pub error_map: Option<PathBuf>,
+    #[command(flatten)]
+    pub regions: RegionArgs,
 }
 
 /// Options shared by `compare` and `converge`.
@@ -256,6 +301,8 @@ pub struct CompareArgs {
     /// Exposure of the images in the grid, in stops.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     pub exposure: f32,
+    #[command(flatten)]
+    pub regions: RegionArgs,
 }
 
 /// `vrpt converge`.
@@ -469,6 +516,7 @@ fn run_diff(args: &DiffArgs) -> Result<()> {
     if let Some(p) = &args.error_map {
         check_image_path(p)?;
     }
+    let regions = args.regions.resolve(a.width, a.height)?;
     let m = metrics(&a.pixels, &r.pixels);
     let mut t = format!("MSE                {:.6e}\n", m.mse);
     t += &format!("relMSE (eps 0.01)  {:.6e}\n", m.rel_mse);
@@ -482,6 +530,19 @@ fn run_diff(args: &DiffArgs) -> Result<()> {
             t += &format!("bias z (image)     {z:+.3}\n");
         }
         t += &format!("max |z| (pixel)    {:.3}\n", b.max_pixel_z);
+    }
+    if !regions.is_empty() {
+        t += &format!(
+            "{:<22} {:>12} {:>12} {:>12} {:>12}\n",
+            "region", "MSE", "relMSE", "RMSE", "MAE"
+        );
+        for reg in &regions {
+            let m = region_metrics(&a.pixels, &r.pixels, a.width, reg);
+            t += &format!(
+                "{:<22} {:>12.4e} {:>12.4e} {:>12.4e} {:>12.4e}\n",
+                reg.name, m.mse, m.rel_mse, m.rmse, m.mae
+            );
+        }
     }
     out(&t);
     if let Some(p) = &args.error_map {
@@ -542,7 +603,8 @@ fn run_compare(args: &CompareArgs) -> Result<()> {
     if let Some(g) = &args.grid {
         check_image_path(g)?;
     }
-    let (scene, reference, s) = experiment_setup(a)?;
+    let (scene, reference, mut s) = experiment_setup(a)?;
+    s.regions = args.regions.resolve(s.width, s.height)?;
     let bar = Bar::new(
         a.quiet,
         a.strategies.0.len() as u64 * a.runs as u64,
@@ -559,7 +621,7 @@ fn run_compare(args: &CompareArgs) -> Result<()> {
         progress,
     )?;
     drop(bar);
-    report(a, &c.table(), &c.rows, &c.rows)?;
+    report(a, &c.table(), &c.rows, &c)?;
     if let Some(p) = &args.grid {
         write_comparison_grid(p, &c, &reference, args.exposure)?;
     }

@@ -1,19 +1,34 @@
-//! Unidirectional path tracing with BSDF sampling.
+//! Unidirectional path tracing, with the light found by BSDF sampling, next-event estimation or
+//! both under multiple importance sampling ([`LightStrategy`]).
 //!
-//! `L = Σ_k β_k L_e(x_k)` along a path built by sampling each bounce from the material with the
-//! chosen [`Directions`] strategy, where the throughput is `β_{k+1} = β_k · f · cosθᵢ / p`.
-//! Emission is one-sided (front faces only); rays that escape see the constant environment.
+//! A path is built by sampling each bounce from the BSDF with the chosen [`Directions`]
+//! strategy; the throughput is `β_{k+1} = β_k · f · cosθᵢ / p_bsdf`. What a vertex `x_k` adds:
 //!
-//! Path length: `max_depth` is the largest number of segments of a path, counting the camera
-//! ray (1 = only directly visible emitters, as Mitsuba's `max_depth`). Russian roulette from the
-//! third bounce on keeps a path with probability `q = min(max β, 0.95)` and divides by `q`: an
-//! unbiased termination.
+//! - `bsdf`: `β_k Le(x_k)` when `x_k` is an emitter seen from its front, or the environment
+//!   when the ray escapes (Veach's "BSDF sampling").
+//! - `nee`: at every vertex one light sample `y` (direction `ωᵢ`, pdf `p_light` per solid angle)
+//!   and a shadow ray: `β_k f(ωₒ, ωᵢ) cosθᵢ Le(y) / p_light` if `y` is visible. Emission reached
+//!   by BSDF-sampled rays after the camera ray is not added: the light samples counted it.
+//! - `mis`: both, weighted by the power heuristic [`mis_weight`]: the light sample by
+//!   `w(p_light, p_bsdf)`, emission hit by a BSDF-sampled ray by `w(p_bsdf, p_light)`, with
+//!   `p_bsdf` the pdf of the current `--directions` strategy and `p_light` the pdf with which
+//!   light sampling at the previous vertex picks the same direction. For every path both can
+//!   make the two weights sum to 1, so the estimator is unbiased.
+//!
+//! Emission is one-sided (front faces only). Path length: `max_depth` is the largest number of
+//! segments of a path, counting the camera ray (1 = only directly visible emitters, as
+//! Mitsuba's `max_depth`); a light sample at the vertex ending segment `k` makes a path of
+//! `k + 1` segments, so it is taken only where a bounce would be. Russian roulette from the
+//! third bounce on keeps a path with probability `q = min(max β, 0.95)` and divides by `q`:
+//! unbiased termination, after the light sample of that vertex (roulette does not enter the
+//! MIS weights: any weights that sum to 1 keep the estimator unbiased).
 //!
 //! Every bounce draws the same dimensions in the same order ([`BounceSample`], the layout in
 //! [`crate::sampler::layout`]), used or not, so a dimension index means the same decision in
 //! every sample — which is what stratification needs.
 
 use crate::bsdf::Directions;
+use crate::lights::LightStrategy;
 use crate::math::Frame;
 use crate::sampler::layout::BounceSample;
 use crate::sampler::Sampler;
@@ -29,9 +44,58 @@ pub struct IntegratorSettings {
     /// Largest number of path segments, counting the camera ray (≥ 1).
     pub max_depth: u32,
     pub directions: Directions,
+    pub lights: LightStrategy,
 }
 
-/// Radiance arriving at `origin` from direction `dir` (unit), and the number of rays traced.
+/// Rays traced, by kind.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RayCounts {
+    pub camera: u64,
+    /// Rays continuing a path after a bounce.
+    pub bounce: u64,
+    /// Occlusion rays toward light samples.
+    pub shadow: u64,
+}
+
+impl RayCounts {
+    /// All rays.
+    pub fn total(&self) -> u64 {
+        self.camera + self.bounce + self.shadow
+    }
+
+    /// Add `o`'s counts.
+    pub fn add(&mut self, o: &RayCounts) {
+        self.camera += o.camera;
+        self.bounce += o.bounce;
+        self.shadow += o.shadow;
+    }
+}
+
+/// The power heuristic (β = 2) of Veach & Guibas 1995 for a sample drawn by the strategy of pdf
+/// `p_a`, when the strategy of pdf `p_b` could have drawn it too:
+/// `w_a = p_a² / (p_a² + p_b²)`. Both pdfs per unit solid angle; `w_a + w_b = 1` whenever
+/// either is positive. Written as `1 / (1 + (p_b/p_a)²)` so huge pdfs do not overflow.
+#[inline]
+pub fn mis_weight(p_a: f32, p_b: f32) -> f32 {
+    if p_a <= 0.0 {
+        return 0.0;
+    }
+    let r = p_b / p_a;
+    1.0 / (1.0 + r * r)
+}
+
+/// The vertex a BSDF-sampled ray left from: what the MIS weight of what it hits needs.
+#[derive(Clone, Copy, Debug)]
+struct Previous {
+    /// Position of the vertex.
+    p: Vec3,
+    /// Its shading normal, on the side the ray left from.
+    n: Vec3,
+    /// The BSDF pdf of the sampled direction.
+    pdf: f32,
+}
+
+/// Radiance arriving at `origin` from direction `dir` (unit); rays traced are added to `rays`.
 #[inline]
 pub fn radiance<S: Sampler>(
     scene: &Scene,
@@ -39,14 +103,29 @@ pub fn radiance<S: Sampler>(
     mut dir: Vec3,
     sampler: &mut S,
     settings: &IntegratorSettings,
-) -> (Vec3, u64) {
+    rays: &mut RayCounts,
+) -> Vec3 {
+    let mode = settings.lights;
+    let sample_lights = mode != LightStrategy::Bsdf && scene.lights.any();
     let mut l = Vec3::ZERO;
     let mut beta = Vec3::ONE;
-    let mut rays = 0u64;
+    // None for the camera ray: what it sees counts fully in every mode
+    let mut prev: Option<Previous> = None;
     for segment in 1..=settings.max_depth {
-        rays += 1;
+        if prev.is_none() {
+            rays.camera += 1;
+        } else {
+            rays.bounce += 1;
+        }
         let Some(hit) = scene.accel.intersect(origin, dir, f32::INFINITY) else {
-            l += beta * scene.environment;
+            let w = match (mode, prev) {
+                (_, None) | (LightStrategy::Bsdf, _) => 1.0,
+                (LightStrategy::Nee, _) => 0.0,
+                (LightStrategy::Mis, Some(v)) => {
+                    mis_weight(v.pdf, scene.lights.environment_pdf(v.n, dir))
+                }
+            };
+            l += beta * scene.environment * w;
             break;
         };
         let s = scene.surface(&hit);
@@ -54,12 +133,23 @@ pub fn radiance<S: Sampler>(
         let wo = -dir;
         let front = s.ng.dot(wo) > 0.0;
         if front && m.is_emissive() {
-            l += beta * m.emission;
+            let w = match (mode, prev) {
+                (_, None) | (LightStrategy::Bsdf, _) => 1.0,
+                (LightStrategy::Nee, _) => 0.0,
+                (LightStrategy::Mis, Some(v)) => {
+                    let p_light = scene
+                        .lights
+                        .light_of(hit.prim)
+                        .map_or(0.0, |i| scene.lights.triangle_pdf(i, v.p, s.p));
+                    mis_weight(v.pdf, p_light)
+                }
+            };
+            l += beta * m.emission * w;
         }
         if segment == settings.max_depth {
             break;
         }
-        let u = BounceSample::draw(sampler);
+        let u = BounceSample::draw(sampler, sample_lights);
         let bsdf = scene.bsdf_at(&s);
         if bsdf.is_black() {
             break;
@@ -71,6 +161,37 @@ pub fn radiance<S: Sampler>(
         }
         let frame = Frame::from_normal(ns);
         let wo_local = frame.to_local(wo);
+        let spawn = s.p + ng * scene.ray_epsilon;
+        if sample_lights {
+            if let Some(ls) = scene.lights.sample(s.p, ns, u.light, u.light_point) {
+                let wi_local = frame.to_local(ls.wi);
+                // light from below the geometric surface cannot arrive (as for BSDF samples)
+                if ls.wi.dot(ng) > 0.0 && wi_local.z > 0.0 {
+                    let f = bsdf.eval(wo_local, wi_local);
+                    if f.max_element() > 0.0 {
+                        let (to, tmax) = if ls.dist.is_finite() {
+                            let y = s.p + ls.wi * ls.dist;
+                            let d = y - spawn;
+                            let len = d.length();
+                            (d / len, len - 2.0 * scene.ray_epsilon)
+                        } else {
+                            (ls.wi, f32::INFINITY)
+                        };
+                        rays.shadow += 1;
+                        if tmax > 0.0 && !scene.accel.occluded(spawn, to, tmax) {
+                            let w = match mode {
+                                LightStrategy::Mis => mis_weight(
+                                    ls.pdf,
+                                    bsdf.pdf(wo_local, wi_local, settings.directions),
+                                ),
+                                _ => 1.0,
+                            };
+                            l += beta * f * ls.le * (wi_local.z * w / ls.pdf);
+                        }
+                    }
+                }
+            }
+        }
         let Some(bs) = bsdf.sample(wo_local, u.lobe, u.direction, settings.directions) else {
             break;
         };
@@ -87,8 +208,29 @@ pub fn radiance<S: Sampler>(
             }
             beta /= q;
         }
-        origin = s.p + ng * scene.ray_epsilon;
+        prev = Some(Previous {
+            p: s.p,
+            n: ns,
+            pdf: bs.pdf,
+        });
+        origin = spawn;
         dir = wi;
     }
-    (l, rays)
+    l
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn power_heuristic_weights_sum_to_one() {
+        for (a, b) in [(1.0f32, 1.0f32), (0.1, 10.0), (1e30, 1e-30), (3.0, 0.0)] {
+            let s = mis_weight(a, b) + mis_weight(b, a);
+            assert!((s - 1.0).abs() < 1e-6, "{a} {b}: {s}");
+        }
+        assert_eq!(mis_weight(0.0, 1.0), 0.0);
+        assert!((mis_weight(1.0, 1.0) - 0.5).abs() < 1e-7);
+        assert!((mis_weight(2.0, 1.0) - 0.8).abs() < 1e-7);
+    }
 }

@@ -1,12 +1,50 @@
-//! The lights of a scene: every emissive triangle (one-sided: it emits on the side its
-//! counter-clockwise normal points to), with a map from BVH-order primitive to light index, so
-//! a BSDF-sampled ray that hits an emitter finds its light (and, for multiple importance
-//! sampling, that light's pdf).
+//! The lights of a scene and how they are sampled: every emissive triangle, and the constant
+//! environment when it is not black.
+//!
+//! - **Emissive triangles** are one-sided: a triangle emits `Le` on the side its
+//!   counter-clockwise normal `n_l` points to. A point on it is chosen uniformly by area
+//!   ([`sample_uniform_triangle`], pdf `1/A`); seen from a point `x` the pdf per unit solid angle
+//!   is `p_ω = p_A · d² / cosθ_l`, with `d = |y − x|` and `cosθ_l = n_l · (x − y)/d > 0`.
+//! - **The environment** (radiance `L_env` for every escaping ray) is sampled by a cosine
+//!   distribution about the shading normal `n` of the vertex it lights: `p_ω = cosθ/π`, zero
+//!   below. Under a diffuse BSDF `f cosθ / p_ω = kd`, so a white furnace has no variance.
+//! - **Selection**: one light per vertex, chosen with probability proportional to its power
+//!   (a CDF, binary search, O(log n)): `Φ = π A lum(Le)` for a triangle (a one-sided Lambertian
+//!   emitter) and `Φ = 4π · πR² · lum(L_env)` for the environment seen by a scene of bounding
+//!   radius `R` (pbrt's estimate). Any positive choice is unbiased; power keeps the weights tame.
+//!
+//! Every pdf this module returns is per unit solid angle at the receiving point and includes
+//! the selection probability. [`Lights::light_of`] maps a BVH-order primitive to its light, so a
+//! BSDF-sampled ray that hits an emitter finds the light pdf of the same path for MIS.
 
 use crate::accel::Accel;
 use crate::material::Material;
+use crate::math::Frame;
+use crate::sampling::{
+    cosine_hemisphere_pdf, sample_cosine_hemisphere, sample_uniform_triangle, uniform_triangle_pdf,
+};
 use crate::scene::TriShading;
-use glam::Vec3;
+use glam::{Vec2, Vec3};
+use std::f32::consts::PI;
+
+/// How light is found at a vertex (the `--lights` flag): the third axis of variance reduction.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum)]
+pub enum LightStrategy {
+    /// BSDF sampling only: emission counts when a sampled ray happens to hit it.
+    Bsdf,
+    /// Next-event estimation: sample one light per vertex and trace a shadow ray; emission
+    /// hit by BSDF-sampled rays after the camera ray is not added.
+    Nee,
+    /// Both, weighted by the power heuristic (multiple importance sampling).
+    #[default]
+    Mis,
+}
+
+impl std::fmt::Display for LightStrategy {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&crate::strategy::value_name(self))
+    }
+}
 
 /// Index in the primitive → light map of a primitive that is no light.
 const NO_LIGHT: u32 = u32::MAX;
@@ -16,24 +54,60 @@ const NO_LIGHT: u32 = u32::MAX;
 pub struct TriangleLight {
     /// BVH-order triangle index.
     pub prim: u32,
+    /// The vertices.
+    pub v: [Vec3; 3],
+    /// Unit normal of the emitting side (counter-clockwise winding).
+    pub n: Vec3,
     /// Area of the triangle.
     pub area: f32,
     /// Emitted radiance on the front side.
     pub emission: Vec3,
 }
 
-/// All lights of a scene.
+/// A sampled light direction.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightSample {
+    /// Unit direction from the receiving point toward the light.
+    pub wi: Vec3,
+    /// Distance to the sampled point (infinite for the environment).
+    pub dist: f32,
+    /// Radiance arriving along `-wi` if nothing is in between.
+    pub le: Vec3,
+    /// Probability density of `wi` per unit solid angle, selection included.
+    pub pdf: f32,
+}
+
+/// All lights of a scene, and the distribution that chooses among them.
 #[derive(Clone, Debug, Default)]
 pub struct Lights {
     /// The emissive triangles, in BVH order.
     pub triangles: Vec<TriangleLight>,
+    /// Radiance of the environment (zero: it is no light).
+    pub environment: Vec3,
     /// `light_index[prim]`: the light of BVH-order triangle `prim`, or [`NO_LIGHT`].
     light_index: Vec<u32>,
+    /// Selection probability of each triangle light, then of the environment (last).
+    pmf: Vec<f32>,
+    /// Running sums of `pmf` (the CDF), the last forced to 1.
+    cdf: Vec<f32>,
+}
+
+/// Luminance (Rec. 709 weights) of linear RGB.
+#[inline]
+pub fn luminance(c: Vec3) -> f32 {
+    c.dot(Vec3::new(0.2126, 0.7152, 0.0722))
 }
 
 impl Lights {
-    /// The emissive triangles among `shading` (BVH order) with their materials.
-    pub fn build(accel: &Accel, shading: &[TriShading], materials: &[Material]) -> Lights {
+    /// The emissive triangles among `shading` (BVH order) with their materials, and the
+    /// environment of radiance `environment` lighting a scene of bounding radius `radius`.
+    pub fn build(
+        accel: &Accel,
+        shading: &[TriShading],
+        materials: &[Material],
+        environment: Vec3,
+        radius: f32,
+    ) -> Lights {
         let mut triangles = Vec::new();
         let mut light_index = vec![NO_LIGHT; shading.len()];
         for (prim, s) in shading.iter().enumerate() {
@@ -41,17 +115,44 @@ impl Lights {
             if !m.is_emissive() {
                 continue;
             }
-            let [a, b, c] = accel.vertices(prim as u32);
+            let v = accel.vertices(prim as u32);
+            let c = (v[1] - v[0]).cross(v[2] - v[0]);
             light_index[prim] = triangles.len() as u32;
             triangles.push(TriangleLight {
                 prim: prim as u32,
-                area: 0.5 * (b - a).cross(c - a).length(),
+                v,
+                n: c.normalize_or_zero(),
+                area: 0.5 * c.length(),
                 emission: m.emission,
             });
         }
+        let mut power: Vec<f64> = triangles
+            .iter()
+            .map(|t| (PI * t.area * luminance(t.emission).max(0.0)) as f64)
+            .collect();
+        power.push((4.0 * PI * PI * radius * radius * luminance(environment).max(0.0)) as f64);
+        let total: f64 = power.iter().sum();
+        let (pmf, cdf) = if total > 0.0 && total.is_finite() {
+            let pmf: Vec<f32> = power.iter().map(|p| (p / total) as f32).collect();
+            let mut acc = 0.0f64;
+            let mut cdf: Vec<f32> = power
+                .iter()
+                .map(|p| {
+                    acc += p / total;
+                    acc as f32
+                })
+                .collect();
+            *cdf.last_mut().expect("the environment entry") = 1.0;
+            (pmf, cdf)
+        } else {
+            (vec![0.0; power.len()], vec![1.0; power.len()])
+        };
         Lights {
             triangles,
+            environment,
             light_index,
+            pmf,
+            cdf,
         }
     }
 
@@ -65,6 +166,11 @@ impl Lights {
         self.triangles.is_empty()
     }
 
+    /// True when something can be sampled (an emitter, or a non-black environment).
+    pub fn any(&self) -> bool {
+        self.pmf.iter().any(|&p| p > 0.0)
+    }
+
     /// The light that BVH-order triangle `prim` is, if it emits.
     #[inline]
     pub fn light_of(&self, prim: u32) -> Option<u32> {
@@ -72,5 +178,96 @@ impl Lights {
             Some(&i) if i != NO_LIGHT => Some(i),
             _ => None,
         }
+    }
+
+    /// The probability of choosing triangle light `i`.
+    #[inline]
+    pub fn pmf(&self, i: u32) -> f32 {
+        self.pmf[i as usize]
+    }
+
+    /// The probability of choosing the environment.
+    #[inline]
+    pub fn environment_pmf(&self) -> f32 {
+        *self.pmf.last().expect("the environment entry")
+    }
+
+    /// Choose a light with `u ∈ [0,1)`: `Some(i)` for triangle `i`, `None` for the environment.
+    #[inline]
+    pub fn choose(&self, u: f32) -> Option<u32> {
+        let mut i = self.cdf.partition_point(|&c| c <= u);
+        // skip entries of zero probability that float rounding might land on
+        while i + 1 < self.pmf.len() && self.pmf[i] == 0.0 {
+            i += 1;
+        }
+        (i < self.triangles.len()).then_some(i as u32)
+    }
+
+    /// Sample a light for the point `p` with shading normal `n` (on the side light is gathered
+    /// from): `u_choose` picks the light, `u` the point on it (or the environment direction).
+    /// `None` when nothing is sampled or the point sees the back of the chosen triangle.
+    #[inline]
+    pub fn sample(&self, p: Vec3, n: Vec3, u_choose: f32, u: Vec2) -> Option<LightSample> {
+        if !self.any() {
+            return None;
+        }
+        match self.choose(u_choose) {
+            Some(i) => {
+                let t = &self.triangles[i as usize];
+                let b = sample_uniform_triangle(u);
+                let y = t.v[0] * b.x + t.v[1] * b.y + t.v[2] * (1.0 - b.x - b.y);
+                let d = y - p;
+                let dist2 = d.length_squared();
+                let dist = dist2.sqrt();
+                if dist <= 0.0 {
+                    return None;
+                }
+                let wi = d / dist;
+                let cos_l = -t.n.dot(wi);
+                if cos_l <= 0.0 {
+                    return None;
+                }
+                Some(LightSample {
+                    wi,
+                    dist,
+                    le: t.emission,
+                    pdf: self.pmf[i as usize] * uniform_triangle_pdf(t.area) * dist2 / cos_l,
+                })
+            }
+            None => {
+                let local = sample_cosine_hemisphere(u);
+                let pdf = self.environment_pmf() * cosine_hemisphere_pdf(local.z);
+                if pdf <= 0.0 {
+                    return None;
+                }
+                Some(LightSample {
+                    wi: Frame::from_normal(n).to_world(local),
+                    dist: f32::INFINITY,
+                    le: self.environment,
+                    pdf,
+                })
+            }
+        }
+    }
+
+    /// The pdf per solid angle with which [`Lights::sample`] at `p` returns the point `y` of
+    /// triangle light `i` (0 when `p` sees its back).
+    #[inline]
+    pub fn triangle_pdf(&self, i: u32, p: Vec3, y: Vec3) -> f32 {
+        let t = &self.triangles[i as usize];
+        let d = y - p;
+        let dist2 = d.length_squared();
+        let cos_l = -t.n.dot(d) / dist2.sqrt();
+        if cos_l <= 0.0 || dist2 <= 0.0 {
+            return 0.0;
+        }
+        self.pmf[i as usize] * uniform_triangle_pdf(t.area) * dist2 / cos_l
+    }
+
+    /// The pdf per solid angle with which [`Lights::sample`] at a point of shading normal `n`
+    /// returns the environment direction `wi`.
+    #[inline]
+    pub fn environment_pdf(&self, n: Vec3, wi: Vec3) -> f32 {
+        self.environment_pmf() * cosine_hemisphere_pdf(n.dot(wi))
     }
 }

@@ -18,6 +18,8 @@ pub struct Material {
     pub exponent: f32,
     /// Emitted radiance (MTL `Ke`), on the front side only.
     pub emission: Vec3,
+    /// The BSDF built from kd, ks and the exponent once, for surfaces without texture.
+    bsdf: Bsdf,
 }
 
 impl Material {
@@ -29,12 +31,14 @@ impl Material {
         let sum = kd + ks;
         let scale = Vec3::ONE / sum.max(Vec3::ONE);
         let scaled = sum.max_element() > 1.0;
+        let (kd, ks, exponent) = (kd * scale, ks * scale, exponent.max(0.0));
         let m = Material {
             name: name.to_string(),
-            kd: kd * scale,
-            ks: ks * scale,
-            exponent: exponent.max(0.0),
+            kd,
+            ks,
+            exponent,
             emission: emission.max(Vec3::ZERO),
+            bsdf: Bsdf::new(kd, ks, exponent),
         };
         (m, scaled)
     }
@@ -52,7 +56,7 @@ impl Material {
     /// The BSDF of this material where it has no texture.
     #[inline]
     pub fn bsdf(&self) -> Bsdf {
-        Bsdf::new(self.kd, self.ks, self.exponent)
+        self.bsdf
     }
 
     /// True when the material emits.

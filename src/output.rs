@@ -9,6 +9,7 @@
 use crate::error::{Error, Result};
 use crate::film::Film;
 use crate::image_io::{write_exr, write_png, Format, RgbImage};
+use crate::lights::LightStrategy;
 use crate::render::{RenderSettings, RenderStats};
 use crate::scene::Scene;
 use crate::strategy::{parse_value, value_name, Strategy};
@@ -91,6 +92,7 @@ impl RenderMetadata {
         );
         put("sampler", value_name(&self.strategy.sampler));
         put("directions", value_name(&self.strategy.directions));
+        put("lights", value_name(&self.strategy.lights));
         put("strategy", self.strategy.to_string());
         put("max_depth", self.max_depth.to_string());
         put("render_seconds", format!("{:.6}", self.render_seconds));
@@ -154,6 +156,11 @@ impl RenderMetadata {
             strategy: Strategy {
                 sampler: parse_value(req(a, "sampler")?, "sampler")?,
                 directions: parse_value(req(a, "directions")?, "directions")?,
+                // renders made before the light axis existed used BSDF sampling only
+                lights: match a.get("lights") {
+                    Some(l) => parse_value(l, "lights")?,
+                    None => LightStrategy::Bsdf,
+                },
             },
             max_depth: num("max_depth", req(a, "max_depth")?)?,
             render_seconds,

@@ -9,7 +9,7 @@
 use crate::camera::Camera;
 use crate::error::{Error, Result};
 use crate::film::Film;
-use crate::integrator::{radiance, IntegratorSettings};
+use crate::integrator::{radiance, IntegratorSettings, RayCounts};
 use crate::sampler::layout::CameraSample;
 use crate::sampler::{IndependentSampler, Sampler, SamplerKind, StratifiedSampler};
 use crate::scene::Scene;
@@ -72,8 +72,8 @@ impl RenderSettings {
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct RenderStats {
     pub elapsed: Duration,
-    /// Rays traced (camera and bounce rays).
-    pub rays: u64,
+    /// Rays traced, by kind.
+    pub rays: RayCounts,
     /// Path samples taken (including dropped ones).
     pub samples: u64,
     /// Samples dropped because their radiance was NaN or infinite.
@@ -83,7 +83,7 @@ pub struct RenderStats {
 impl RenderStats {
     /// Millions of rays per second of wall time.
     pub fn mrays_per_second(&self) -> f64 {
-        self.rays as f64 / self.elapsed.as_secs_f64().max(1e-9) / 1e6
+        self.rays.total() as f64 / self.elapsed.as_secs_f64().max(1e-9) / 1e6
     }
 
     /// Path samples per second of wall time.
@@ -97,7 +97,7 @@ impl RenderStats {
         format!(
             "{}: {} triangles, BVH built in {:.1} ms ({:.1} KiB)\n\
              rendered {}x{} at {} spp ({}, max depth {}) in {:.3} s: {:.3} M samples/s, {:.2} Mrays/s\n\
-             rays: {} ({} camera, {} bounce; {:.2} per sample)\n",
+             rays: {} ({} camera, {} bounce, {} shadow; {:.2} per sample)\n",
             scene.source.display(),
             scene.triangle_count(),
             scene.accel.build_time.as_secs_f64() * 1e3,
@@ -110,10 +110,11 @@ impl RenderStats {
             self.elapsed.as_secs_f64(),
             self.samples_per_second() / 1e6,
             self.mrays_per_second(),
-            self.rays,
-            self.samples,
-            self.rays - self.samples,
-            self.rays as f64 / self.samples.max(1) as f64
+            self.rays.total(),
+            self.rays.camera,
+            self.rays.bounce,
+            self.rays.shadow,
+            self.rays.total() as f64 / self.samples.max(1) as f64
         )
     }
 }
@@ -234,7 +235,7 @@ pub fn render_passes(
             };
             let (f, s) = render_on_pool(scene, &camera, &pass_settings, progress);
             film.merge(&f).map_err(Error::Settings)?;
-            stats.rays += s.rays;
+            stats.rays.add(&s.rays);
             stats.samples += s.samples;
             stats.nonfinite += s.nonfinite;
             done += n;
@@ -252,7 +253,7 @@ struct TileResult {
     origin: UVec2,
     size: UVec2,
     sums: Vec<(DVec3, DVec3, u64)>,
-    rays: u64,
+    rays: RayCounts,
     samples: u64,
     nonfinite: u64,
 }
@@ -268,6 +269,7 @@ fn render_with<S: Sampler>(
     let integrator = IntegratorSettings {
         max_depth: settings.max_depth,
         directions: settings.strategy.directions,
+        lights: settings.strategy.lights,
     };
     let tiles_x = settings.width.div_ceil(TILE);
     let tiles_y = settings.height.div_ceil(TILE);
@@ -283,7 +285,7 @@ fn render_with<S: Sampler>(
                 origin,
                 size,
                 sums: Vec::with_capacity((size.x * size.y) as usize),
-                rays: 0,
+                rays: RayCounts::default(),
                 samples: 0,
                 nonfinite: 0,
             };
@@ -294,8 +296,7 @@ fn render_with<S: Sampler>(
                     for index in settings.first_sample..settings.first_sample + settings.spp {
                         sampler.start_pixel_sample(pixel, index);
                         let (o, d) = camera.generate_ray(pixel, CameraSample::draw(sampler).pixel);
-                        let (l, rays) = radiance(scene, o, d, sampler, &integrator);
-                        tile.rays += rays;
+                        let l = radiance(scene, o, d, sampler, &integrator, &mut tile.rays);
                         if l.is_finite() {
                             let v = l.as_dvec3();
                             sum += v;
@@ -324,7 +325,7 @@ fn render_with<S: Sampler>(
                 k += 1;
             }
         }
-        stats.rays += tile.rays;
+        stats.rays.add(&tile.rays);
         stats.samples += tile.samples;
         stats.nonfinite += tile.nonfinite;
     }

@@ -10,6 +10,11 @@
 //! | [`sample_uniform_hemisphere`] | `1/(2π)` |
 //! | [`sample_cosine_hemisphere`] | `cosθ/π` |
 //! | [`sample_phong_lobe`] | `(n+1)/(2π) cosⁿα` |
+//! | [`sample_uniform_triangle`] | `1/A` per unit area |
+//!
+//! The triangle warp returns barycentric coordinates; it is the low-distortion map of Heitz
+//! 2019 ("A low-distortion map between triangle and square"), which keeps strata of the square
+//! compact on the triangle.
 
 use glam::{Vec2, Vec3};
 use std::f32::consts::{FRAC_1_PI, FRAC_PI_2, FRAC_PI_4, PI};
@@ -87,6 +92,26 @@ pub fn phong_lobe_pdf(exponent: f32, cos_alpha: f32) -> f32 {
         return 0.0;
     }
     (exponent + 1.0) * INV_2PI * cos_alpha.powf(exponent)
+}
+
+/// A point uniform by area on a triangle, as barycentrics `(b0, b1)` of its first two vertices
+/// (`b2 = 1 − b0 − b1`): Heitz's low-distortion map, which folds the square onto the triangle
+/// along its diagonal and shears each half, so nearby `u` give nearby points.
+#[inline]
+pub fn sample_uniform_triangle(u: Vec2) -> Vec2 {
+    if u.x < u.y {
+        let b0 = 0.5 * u.x;
+        Vec2::new(b0, u.y - b0)
+    } else {
+        let b1 = 0.5 * u.y;
+        Vec2::new(u.x - b1, b1)
+    }
+}
+
+/// The pdf of [`sample_uniform_triangle`] per unit area of a triangle of area `area`: `1/A`.
+#[inline]
+pub fn uniform_triangle_pdf(area: f32) -> f32 {
+    1.0 / area
 }
 
 #[cfg(test)]

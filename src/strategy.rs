@@ -1,13 +1,17 @@
 //! The strategy: one point on the grid of variance-reduction axes, and its names.
 //!
-//! Each axis is an enum deriving `clap::ValueEnum` ([`SamplerKind`], [`Directions`]); every
-//! name — flag values, `SAMPLER+DIRECTIONS` in experiments, metadata, the `all` list, help
-//! text — comes from `ValueEnum::value_variants` and `to_possible_value`, so a new sampler or
-//! direction strategy is one enum variant. The named presets of the mission ([`Preset`]) are
-//! points on the grid: independent = (independent, uniform), stratified = (stratified, uniform),
-//! importance = (independent, phong), combined = (stratified, phong).
+//! Each axis is an enum deriving `clap::ValueEnum` ([`SamplerKind`], [`Directions`],
+//! [`LightStrategy`]); every name — flag values, `SAMPLER+DIRECTIONS+LIGHTS` in experiments,
+//! metadata, the `all` list, help text — comes from `ValueEnum::value_variants` and
+//! `to_possible_value`, so a new sampler, direction or light strategy is one enum variant. The
+//! named presets ([`Preset`]) are points on the grid: the mission's four with BSDF sampling
+//! only — independent = (independent, uniform, bsdf), stratified = (stratified, uniform, bsdf),
+//! importance = (independent, phong, bsdf), combined = (stratified, phong, bsdf) — and the light
+//! axis on top of the best of them: nee = (stratified, phong, nee), mis = (stratified, phong,
+//! mis), the default.
 
 use crate::bsdf::Directions;
+use crate::lights::LightStrategy;
 use crate::sampler::SamplerKind;
 use clap::ValueEnum;
 
@@ -44,12 +48,14 @@ pub struct Strategy {
     pub sampler: SamplerKind,
     /// How bounce directions are chosen.
     pub directions: Directions,
+    /// How light is found at a vertex.
+    pub lights: LightStrategy,
 }
 
 impl Default for Strategy {
-    /// The best combination: stratified points, Phong-lobe directions.
+    /// The best combination: stratified points, Phong-lobe directions, MIS.
     fn default() -> Self {
-        Preset::Combined.strategy()
+        Preset::Mis.strategy()
     }
 }
 
@@ -59,10 +65,13 @@ impl Strategy {
         let mut v = Vec::new();
         for &sampler in SamplerKind::value_variants() {
             for &directions in Directions::value_variants() {
-                v.push(Strategy {
-                    sampler,
-                    directions,
-                });
+                for &lights in LightStrategy::value_variants() {
+                    v.push(Strategy {
+                        sampler,
+                        directions,
+                        lights,
+                    });
+                }
             }
         }
         v
@@ -76,47 +85,57 @@ impl Strategy {
             .find(|p| p.strategy() == *self)
     }
 
-    /// `SAMPLER+DIRECTIONS`, whether or not a preset names it.
+    /// `SAMPLER+DIRECTIONS+LIGHTS`, whether or not a preset names it.
     pub fn axes_name(&self) -> String {
         format!(
-            "{}+{}",
+            "{}+{}+{}",
             value_name(&self.sampler),
-            value_name(&self.directions)
+            value_name(&self.directions),
+            value_name(&self.lights)
         )
     }
 
-    /// Parse a preset name or `SAMPLER+DIRECTIONS`.
+    /// Parse a preset name, `SAMPLER+DIRECTIONS+LIGHTS`, or `SAMPLER+DIRECTIONS` (lights
+    /// `bsdf`, as before the light axis existed).
     pub fn parse(s: &str) -> Result<Strategy, String> {
         let s = s.trim();
         if let Ok(p) = Preset::from_str(s, false) {
             return Ok(p.strategy());
         }
-        let Some((a, b)) = s.split_once('+') else {
+        let parts: Vec<&str> = s.split('+').collect();
+        if !(2..=3).contains(&parts.len()) {
             return Err(format!(
-                "unknown strategy '{s}': use a preset ({}) or SAMPLER+DIRECTIONS (e.g. stratified+cosine)",
+                "unknown strategy '{s}': use a preset ({}) or SAMPLER+DIRECTIONS+LIGHTS \
+                 (e.g. stratified+cosine+mis)",
                 value_names::<Preset>()
             ));
-        };
+        }
         Ok(Strategy {
-            sampler: parse_value(a, "sampler")?,
-            directions: parse_value(b, "directions")?,
+            sampler: parse_value(parts[0], "sampler")?,
+            directions: parse_value(parts[1], "directions")?,
+            lights: match parts.get(2) {
+                Some(l) => parse_value(l, "lights")?,
+                None => LightStrategy::Bsdf,
+            },
         })
     }
 
     /// What `--strategies` accepts, for help texts.
     pub fn list_help() -> String {
         format!(
-            "presets ({}), or SAMPLER+DIRECTIONS with SAMPLER one of {} and DIRECTIONS one of {}; \
-             `all` for every combination",
+            "Strategies, comma-separated: presets ({}), or SAMPLER+DIRECTIONS+LIGHTS with SAMPLER \
+             one of {}, DIRECTIONS one of {} and LIGHTS one of {} (SAMPLER+DIRECTIONS means \
+             +bsdf); `all` for every combination",
             value_names::<Preset>(),
             value_names::<SamplerKind>(),
-            value_names::<Directions>()
+            value_names::<Directions>(),
+            value_names::<LightStrategy>()
         )
     }
 }
 
 impl std::fmt::Display for Strategy {
-    /// The preset's name (`combined`), else `sampler+directions` (`stratified+cosine`).
+    /// The preset's name (`combined`), else `sampler+directions+lights`.
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self.preset() {
             Some(p) => f.write_str(&value_name(&p)),
@@ -134,31 +153,45 @@ pub enum Preset {
     Stratified,
     /// independent points, Phong-lobe importance sampling.
     Importance,
-    /// stratified points, Phong-lobe importance sampling: the best combination.
+    /// stratified points, Phong-lobe importance sampling: the best without light sampling.
     Combined,
+    /// stratified points, Phong-lobe directions, next-event estimation.
+    Nee,
+    /// stratified points, Phong-lobe directions, light and BSDF sampling under MIS: the
+    /// default.
+    Mis,
 }
 
 impl Preset {
     /// The point of the grid this preset names.
     pub fn strategy(self) -> Strategy {
-        let (sampler, directions) = match self {
-            Preset::Independent => (SamplerKind::Independent, Directions::Uniform),
-            Preset::Stratified => (SamplerKind::Stratified, Directions::Uniform),
-            Preset::Importance => (SamplerKind::Independent, Directions::Phong),
-            Preset::Combined => (SamplerKind::Stratified, Directions::Phong),
+        use LightStrategy as L;
+        let (sampler, directions, lights) = match self {
+            Preset::Independent => (SamplerKind::Independent, Directions::Uniform, L::Bsdf),
+            Preset::Stratified => (SamplerKind::Stratified, Directions::Uniform, L::Bsdf),
+            Preset::Importance => (SamplerKind::Independent, Directions::Phong, L::Bsdf),
+            Preset::Combined => (SamplerKind::Stratified, Directions::Phong, L::Bsdf),
+            Preset::Nee => (SamplerKind::Stratified, Directions::Phong, L::Nee),
+            Preset::Mis => (SamplerKind::Stratified, Directions::Phong, L::Mis),
         };
         Strategy {
             sampler,
             directions,
+            lights,
         }
     }
 
-    /// Every preset's strategy, in the order experiments report them.
-    pub fn all() -> Vec<Strategy> {
-        Preset::value_variants()
-            .iter()
-            .map(|p| p.strategy())
-            .collect()
+    /// The mission's four presets (BSDF sampling only), in the order experiments report them.
+    pub fn mission() -> Vec<Strategy> {
+        [
+            Preset::Independent,
+            Preset::Stratified,
+            Preset::Importance,
+            Preset::Combined,
+        ]
+        .iter()
+        .map(|p| p.strategy())
+        .collect()
     }
 }
 
@@ -177,26 +210,30 @@ mod tests {
         let all = Strategy::all();
         assert_eq!(
             all.len(),
-            SamplerKind::value_variants().len() * Directions::value_variants().len()
+            SamplerKind::value_variants().len()
+                * Directions::value_variants().len()
+                * LightStrategy::value_variants().len()
         );
         for s in &all {
             assert_eq!(Strategy::parse(&s.to_string()).unwrap(), *s);
             assert_eq!(Strategy::parse(&s.axes_name()).unwrap(), *s);
         }
-        assert_eq!(Strategy::parse("combined").unwrap().to_string(), "combined");
-        assert_eq!(
-            Strategy::parse("stratified+cosine").unwrap().to_string(),
-            "stratified+cosine"
-        );
-        assert_eq!(
-            Strategy::parse("independent+phong").unwrap().to_string(),
-            "importance"
-        );
+        let name = |s: &str| Strategy::parse(s).unwrap().to_string();
+        assert_eq!(name("combined"), "combined");
+        assert_eq!(name("stratified+cosine"), "stratified+cosine+bsdf");
+        assert_eq!(name("independent+phong"), "importance");
+        assert_eq!(name("independent+phong+bsdf"), "importance");
+        assert_eq!(name("stratified+phong+mis"), "mis");
+        assert_eq!(name("independent+cosine+nee"), "independent+cosine+nee");
         assert!(Strategy::parse("nosuch+phong")
             .unwrap_err()
             .contains("sampler"));
+        assert!(Strategy::parse("stratified+phong+x")
+            .unwrap_err()
+            .contains("lights"));
+        assert!(Strategy::parse("a+b+c+d").is_err());
         assert!(Strategy::parse("best").is_err());
-        assert_eq!(Preset::all().len(), 4);
-        assert_eq!(Strategy::default(), Preset::Combined.strategy());
+        assert_eq!(Preset::mission().len(), 4);
+        assert_eq!(Strategy::default(), Preset::Mis.strategy());
     }
 }

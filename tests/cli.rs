@@ -176,6 +176,25 @@ fn bad_input_gives_one_line_and_nonzero_exit() {
         "--strategy importance",
     );
     assert_one_line_error(
+        &vrpt(&[
+            "render",
+            cb,
+            "-o",
+            o,
+            "--strategy",
+            "combined",
+            "--lights",
+            "mis",
+        ]),
+        "conflicting lights",
+        "--strategy combined uses --lights bsdf",
+    );
+    assert_one_line_error(
+        &vrpt(&["render", cb, "-o", o, "--lights", "sometimes"]),
+        "lights value",
+        "sometimes",
+    );
+    assert_one_line_error(
         &vrpt(&["render", cb, "-o", "/nonexistent-dir/x.png", "--spp", "1"]),
         "unwritable",
         "/nonexistent-dir",
@@ -230,6 +249,7 @@ fn help_explains_the_flags() {
         "--sampler",
         "--directions",
         "--strategy",
+        "--lights",
         "--exposure",
         "--variance",
     ] {

@@ -40,6 +40,7 @@ fn settings(w: u32, h: u32, max_depth: u32, runs: u32) -> ExperimentSettings {
         seed: 1,
         runs,
         threads: None,
+        regions: Vec::new(),
     }
 }
 
@@ -70,7 +71,7 @@ fn compare_presets(
     let c = compare(
         scene,
         r,
-        &Preset::all(),
+        &Preset::mission(),
         spp,
         None,
         &settings(w, h, max_depth, 16),
@@ -374,6 +375,36 @@ fn merge_and_diff_from_the_command_line() {
         "{out}"
     );
     assert_eq!(image::open(p("err.png")).unwrap().width(), 8);
+    // metrics per region: a named one and a file of two, each reported on its own line
+    std::fs::write(
+        p("regions.txt"),
+        "# two halves\nleft 0,0,4,8\nright 4,0,4,8\n",
+    )
+    .unwrap();
+    let o = run(&[
+        "diff",
+        &p("a.exr"),
+        &p("m.exr"),
+        "--region",
+        "corner=0,0,2,2",
+        "--regions",
+        &p("regions.txt"),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = String::from_utf8_lossy(&o.stdout);
+    for name in ["corner", "left", "right"] {
+        assert!(out.lines().any(|l| l.starts_with(name)), "{name}: {out}");
+    }
+    // a region outside the image, or malformed, is one line of error
+    for bad in ["6,6,4,4", "1,2,3"] {
+        let o = run(&["diff", &p("a.exr"), &p("m.exr"), "--region", bad]);
+        assert!(!o.status.success(), "{bad}");
+        assert_eq!(
+            String::from_utf8_lossy(&o.stderr).lines().count(),
+            1,
+            "{bad}"
+        );
+    }
     // merging a render with itself is refused with one line
     let o = run(&["merge", &p("a.exr"), &p("a.exr"), "-o", &p("x.exr")]);
     assert!(!o.status.success());

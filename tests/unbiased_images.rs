@@ -42,6 +42,7 @@ mod common;
 use common::render_quiet;
 use std::path::Path;
 use vrpt::bsdf::Directions;
+use vrpt::lights::LightStrategy;
 use vrpt::render::RenderSettings;
 use vrpt::sampler::SamplerKind;
 use vrpt::scene::Scene;
@@ -64,6 +65,7 @@ fn check_all_combinations(name: &str, scene: &Scene, max_depth: u32) {
                 strategy: Strategy {
                     sampler,
                     directions,
+                    lights: LightStrategy::Bsdf,
                 },
                 seed,
                 ..base.clone()
@@ -91,6 +93,7 @@ fn check_all_combinations(name: &str, scene: &Scene, max_depth: u32) {
                 strategy: Strategy {
                     sampler,
                     directions,
+                    lights: LightStrategy::Bsdf,
                 },
                 seed,
                 ..base.clone()
@@ -176,4 +179,165 @@ fn big_light_broad_lobe_cornell_box_agrees_for_all_six_combinations() {
     let dir = tempfile::tempdir().unwrap();
     let scene = big_light_cornell(dir.path(), "Ns 20");
     check_all_combinations("big-light cornell Ns 20", &scene, 8);
+}
+
+/// The **shipped** Cornell box (its small light, the Ns 200 glossy box) under every light
+/// strategy: BSDF sampling, next-event estimation and MIS (with phong directions and the
+/// stratified sampler, and MIS and NEE with other direction strategies and the independent
+/// sampler) agree with a 65536-spp MIS reference.
+///
+/// The test compares **regions** of 4×4 pixels (16 regions of a 16×16 image, 3 channels):
+/// a region's mean is the average of its pixels' means, its variance `Σ v_i / 16²` (pixels are
+/// independent), taken from a second render with another seed (as in the test above, so the
+/// variance is not correlated with the mean). Regions pool 16 × 16384 samples, so even BSDF
+/// sampling — which finds the small light in ~1% of its samples and has heavy tails that made
+/// pixel tests lie on this scene — has a Kish ESS in the thousands; a region-channel is tested
+/// when the pilot's pooled ESS `(ΣS)²/ΣQ` is at least 300 (see above), and at least 75% must
+/// be. Bound: Šidák's two-sided critical value at family-wise α = 10⁻³ over all
+/// strategies × regions × channels.
+///
+/// Power: a wrong light pdf under NEE (every light sample divided by 1.05 too many, which in
+/// `nee` mode is exactly the image of a light with Ke/1.05 everywhere but on the light itself)
+/// must fail in most regions.
+#[test]
+fn shipped_cornell_box_agrees_for_every_light_strategy() {
+    use vrpt::sampler::SamplerKind::{Independent, Stratified};
+    let scene = common::shipped("cornell-box");
+    let (w, block) = (16u32, 4u32);
+    let base = RenderSettings {
+        width: w,
+        height: w,
+        spp: 16384,
+        max_depth: 8,
+        ..Default::default()
+    };
+    let (reference, _) = render_quiet(
+        &scene,
+        &RenderSettings {
+            spp: 65536,
+            seed: 1000,
+            ..base.clone()
+        },
+    );
+    let strategies = [
+        (Stratified, Directions::Phong, LightStrategy::Bsdf),
+        (Stratified, Directions::Phong, LightStrategy::Nee),
+        (Stratified, Directions::Phong, LightStrategy::Mis),
+        (Independent, Directions::Uniform, LightStrategy::Mis),
+        (Independent, Directions::Cosine, LightStrategy::Nee),
+    ];
+    let nb = (w / block) as usize;
+    let tests = strategies.len() * nb * nb * 3;
+    let z_crit = normal_critical_value(sidak(1e-3, tests));
+    // (region mean, its variance, pooled ESS) per region and channel
+    let regions = |film: &vrpt::film::Film| -> Vec<[(f64, f64, f64); 3]> {
+        let mut out = Vec::new();
+        for by in 0..nb as u32 {
+            for bx in 0..nb as u32 {
+                let mut acc = [(0.0f64, 0.0f64, 0.0f64, 0.0f64); 3];
+                for y in by * block..(by + 1) * block {
+                    for x in bx * block..(bx + 1) * block {
+                        let i = film.index(x, y);
+                        let (m, v, e) = (
+                            film.mean(i),
+                            film.variance_of_mean(i),
+                            film.effective_samples(i),
+                        );
+                        let n = film.count(i) as f64;
+                        for c in 0..3 {
+                            let s = m[c] * n;
+                            acc[c].0 += m[c];
+                            acc[c].1 += v[c];
+                            acc[c].2 += s;
+                            acc[c].3 += if e[c] > 0.0 { s * s / e[c] } else { 0.0 };
+                        }
+                    }
+                }
+                let k = (block * block) as f64;
+                out.push(std::array::from_fn(|c| {
+                    let (m, v, s, q) = acc[c];
+                    (m / k, v / (k * k), if q > 0.0 { s * s / q } else { 0.0 })
+                }));
+            }
+        }
+        out
+    };
+    let reference = regions(&reference);
+    let judge = |name: &str, scene: &Scene, strategy: Strategy, seed: u64| {
+        let settings = RenderSettings {
+            strategy,
+            seed,
+            ..base.clone()
+        };
+        let (film, stats) = render_quiet(scene, &settings);
+        assert_eq!(stats.nonfinite, 0);
+        let (pilot, _) = render_quiet(
+            scene,
+            &RenderSettings {
+                seed: seed + 500,
+                ..settings
+            },
+        );
+        let (m, p) = (regions(&film), regions(&pilot));
+        let (mut worst, mut tested, mut failed) = (0.0f64, 0usize, 0usize);
+        for k in 0..m.len() {
+            for c in 0..3 {
+                let (mean, _, _) = m[k][c];
+                let (_, var, ess) = p[k][c];
+                let (rmean, rvar, _) = reference[k][c];
+                if ess < 300.0 || var + rvar == 0.0 {
+                    continue;
+                }
+                tested += 1;
+                let z = (mean - rmean).abs() / (var + rvar).sqrt();
+                worst = worst.max(z);
+                if z > z_crit {
+                    failed += 1;
+                }
+            }
+        }
+        eprintln!(
+            "{name} {strategy}: worst |z| {worst:.2} over {tested} of {} region-channels, \
+             {failed} above {z_crit:.2}",
+            m.len() * 3
+        );
+        assert!(
+            tested as f64 >= 0.75 * (m.len() * 3) as f64,
+            "{name} {strategy}: only {tested} region-channels testable"
+        );
+        (tested, failed)
+    };
+    for (k, &(sampler, directions, lights)) in strategies.iter().enumerate() {
+        let strategy = Strategy {
+            sampler,
+            directions,
+            lights,
+        };
+        let (_, failed) = judge("shipped cornell", &scene, strategy, 20 + 1000 * k as u64);
+        assert_eq!(failed, 0, "{strategy} disagrees with the reference");
+    }
+    // the power check: NEE with every light sample 1/1.05 too small
+    let dir = tempfile::tempdir().unwrap();
+    let src = common::cornell_path();
+    for f in ["cornell-box.obj", "scene.toml"] {
+        std::fs::copy(src.join(f), dir.path().join(f)).unwrap();
+    }
+    let mtl = std::fs::read_to_string(src.join("cornell-box.mtl")).unwrap();
+    assert!(mtl.contains("Ke 17 12 4"));
+    let mtl = mtl.replace(
+        "Ke 17 12 4",
+        &format!("Ke {} {} {}", 17.0 / 1.05, 12.0 / 1.05, 4.0 / 1.05),
+    );
+    std::fs::write(dir.path().join("cornell-box.mtl"), mtl).unwrap();
+    let wrong = vrpt::scene::load(dir.path()).unwrap();
+    let strategy = Strategy {
+        sampler: Stratified,
+        directions: Directions::Phong,
+        lights: LightStrategy::Nee,
+    };
+    let (tested, failed) = judge("light pdf x1.05", &wrong, strategy, 20 + 1000);
+    assert!(
+        2 * failed >= tested,
+        "a 5% error in the light pdf must fail most regions ({failed} of {tested})"
+    );
 }

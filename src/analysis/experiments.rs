@@ -10,7 +10,9 @@
 //!   `log MSE` against `log spp` (−1 for independent samples, steeper with stratification).
 
 use crate::analysis::fit::log_log_slope;
-use crate::analysis::metrics::{bias_test, mean_variance, metrics, variance_across_runs, Metrics};
+use crate::analysis::metrics::{
+    bias_test, mean_variance, metrics, region_metrics, variance_across_runs, Metrics, Region,
+};
 use crate::error::{Error, Result};
 use crate::image_io::RgbImage;
 use crate::output::RenderMetadata;
@@ -31,6 +33,8 @@ pub struct ExperimentSettings {
     pub seed: u64,
     pub runs: u32,
     pub threads: Option<usize>,
+    /// Parts of the image whose metrics `compare` also reports on their own.
+    pub regions: Vec<Region>,
 }
 
 /// Told about each finished render of an experiment (for a progress bar).
@@ -75,6 +79,7 @@ impl ExperimentSettings {
             seed,
             runs,
             threads,
+            regions: Vec::new(),
         };
         check_reference(scene, reference, &s)?;
         Ok(s)
@@ -90,6 +95,9 @@ pub fn check_reference(scene: &Scene, reference: &RgbImage, s: &ExperimentSettin
             "{}×{} image, but the experiment renders {}×{}",
             reference.width, reference.height, s.width, s.height
         )));
+    }
+    for r in &s.regions {
+        r.check(s.width, s.height).map_err(&err)?;
     }
     let Some(meta) = RenderMetadata::from_image(reference, Path::new("reference"))? else {
         return Ok(());
@@ -136,11 +144,27 @@ pub struct CompareRow {
     pub efficiency: f64,
 }
 
+/// One strategy's metrics over one region (means over runs).
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct RegionRow {
+    pub strategy: String,
+    pub region: String,
+    pub mse: f64,
+    pub rel_mse: f64,
+    pub rmse: f64,
+    pub mae: f64,
+    /// `MSE_baseline / MSE` in this region.
+    pub mse_reduction: f64,
+}
+
 /// A comparison: one row per strategy and each strategy's first run's image.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize)]
 pub struct Comparison {
     pub rows: Vec<CompareRow>,
+    /// Per strategy (in the order of `rows`) and region (in the settings' order).
+    pub regions: Vec<RegionRow>,
     pub baseline: String,
+    #[serde(skip)]
     pub images: Vec<Vec<Vec3>>,
     /// The reference's mean variance of the mean, if it records one: the floor under every MSE.
     pub reference_variance: Option<f64>,
@@ -170,10 +194,12 @@ pub fn compare(
     with_threads(s.threads, || -> Result<Comparison> {
         warm_up(scene, s)?;
         let mut rows = Vec::new();
+        let mut region_rows: Vec<RegionRow> = Vec::new();
         let mut images = Vec::new();
         for st in strategies {
             let mut runs: Vec<Vec<Vec3>> = Vec::new();
             let (mut secs, mut spps, mut ms) = (Vec::new(), Vec::new(), Vec::<Metrics>::new());
+            let mut region_ms: Vec<Vec<Metrics>> = vec![Vec::new(); s.regions.len()];
             for k in 0..s.runs {
                 let max_spp = if equal_time.is_some() {
                     u32::MAX / 2
@@ -188,10 +214,24 @@ pub fn compare(
                 let (film, stats, reached) = render_passes(scene, &settings, &plan, &NoProgress)?;
                 let img = film.mean_image();
                 ms.push(metrics(&img, &reference.pixels));
+                for (r, m) in s.regions.iter().zip(&mut region_ms) {
+                    m.push(region_metrics(&img, &reference.pixels, s.width, r));
+                }
                 secs.push(stats.elapsed.as_secs_f64());
                 spps.push(reached as f64);
                 runs.push(img);
                 progress.finished(&format!("{st} run {}/{}", k + 1, s.runs), 1);
+            }
+            for (r, m) in s.regions.iter().zip(&region_ms) {
+                region_rows.push(RegionRow {
+                    strategy: st.to_string(),
+                    region: r.name.clone(),
+                    mse: mean_of(m, |m| m.mse),
+                    rel_mse: mean_of(m, |m| m.rel_mse),
+                    rmse: mean_of(m, |m| m.rmse),
+                    mae: mean_of(m, |m| m.mae),
+                    mse_reduction: 1.0,
+                });
             }
             let bias = bias_test(&runs, &reference.pixels);
             rows.push(CompareRow {
@@ -220,10 +260,16 @@ pub fn compare(
             r.mse_reduction = base_mse / r.mse;
             r.efficiency = (base_mse * base_t) / (r.mse * r.seconds);
         }
+        // region rows are strategy-major: the baseline's rows start at base × regions
+        let nr = s.regions.len();
+        for k in 0..region_rows.len() {
+            region_rows[k].mse_reduction = region_rows[base * nr + k % nr].mse / region_rows[k].mse;
+        }
         let reference_variance = reference.variance.as_deref().map(mean_variance);
         Ok(Comparison {
             baseline: rows[base].strategy.clone(),
             rows,
+            regions: region_rows,
             images,
             reference_variance,
         })
@@ -374,6 +420,27 @@ impl Comparison {
             s += &format!("; the reference's own variance, {v:.3e}, is a floor under every MSE");
         }
         s += ")\n";
+        if !self.regions.is_empty() {
+            s += "\nMSE per region (best in each region marked *):\n";
+            s += &format!("{:<22}", "region");
+            for r in &self.rows {
+                s += &format!(" {:>22}", r.strategy);
+            }
+            s += "\n";
+            let nr = self.regions.len() / self.rows.len().max(1);
+            for k in 0..nr {
+                let row: Vec<&RegionRow> = (0..self.rows.len())
+                    .map(|i| &self.regions[i * nr + k])
+                    .collect();
+                let best = row.iter().map(|r| r.mse).fold(f64::INFINITY, f64::min);
+                s += &format!("{:<22}", row[0].region);
+                for r in &row {
+                    let mark = if r.mse == best { "*" } else { " " };
+                    s += &format!(" {:>21.4e}{mark}", r.mse);
+                }
+                s += "\n";
+            }
+        }
         s
     }
 }

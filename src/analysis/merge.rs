@@ -50,6 +50,7 @@ pub fn merge(inputs: &[MergeInput]) -> Result<(RgbImage, RenderMetadata)> {
                 "directions",
                 m.strategy.directions != first.strategy.directions,
             ),
+            ("lights", m.strategy.lights != first.strategy.lights),
         ];
         if let Some((key, _)) = differs.iter().find(|(_, d)| *d) {
             let a = m.to_attributes();

@@ -57,6 +57,88 @@ pub fn metrics(image: &[Vec3], reference: &[Vec3]) -> Metrics {
     }
 }
 
+/// A named rectangle of pixels, `[x, x+w) × [y, y+h)` (rows top to bottom), over which
+/// metrics are reported on their own: a scene's parts compared separately.
+#[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
+pub struct Region {
+    pub name: String,
+    pub x: u32,
+    pub y: u32,
+    pub w: u32,
+    pub h: u32,
+}
+
+impl Region {
+    /// Parse `X,Y,W,H` or `NAME=X,Y,W,H` (an unnamed region is named by its numbers).
+    pub fn parse(s: &str) -> Result<Region, String> {
+        let s = s.trim();
+        let (name, rect) = match s.split_once('=') {
+            Some((n, r)) => (n.trim().to_string(), r),
+            None => (s.to_string(), s),
+        };
+        let v: Vec<u32> = rect
+            .split(',')
+            .map(|x| x.trim().parse::<u32>())
+            .collect::<Result<_, _>>()
+            .map_err(|_| format!("region '{s}': expected X,Y,W,H (whole pixels)"))?;
+        let [x, y, w, h] = v[..] else {
+            return Err(format!("region '{s}': expected four numbers X,Y,W,H"));
+        };
+        if w == 0 || h == 0 || name.is_empty() || name.chars().any(char::is_whitespace) {
+            return Err(format!(
+                "region '{s}': needs a width and height of at least 1 and a name without spaces"
+            ));
+        }
+        Ok(Region { name, x, y, w, h })
+    }
+
+    /// Parse a region list: one `NAME X,Y,W,H` per line; blank lines and `#` comments are
+    /// skipped. Errors name the line.
+    pub fn parse_list(text: &str) -> Result<Vec<Region>, String> {
+        let mut out = Vec::new();
+        for (no, line) in text.lines().enumerate() {
+            let line = line.split('#').next().unwrap_or("").trim();
+            if line.is_empty() {
+                continue;
+            }
+            let (name, rect) = line
+                .split_once(char::is_whitespace)
+                .ok_or_else(|| format!("line {}: expected NAME X,Y,W,H", no + 1))?;
+            let r = Region::parse(&format!("{name}={}", rect.trim()))
+                .map_err(|e| format!("line {}: {e}", no + 1))?;
+            out.push(r);
+        }
+        Ok(out)
+    }
+
+    /// An error unless the region lies inside a `width × height` image.
+    pub fn check(&self, width: u32, height: u32) -> Result<(), String> {
+        if self.x as u64 + self.w as u64 > width as u64
+            || self.y as u64 + self.h as u64 > height as u64
+        {
+            return Err(format!(
+                "region {} ({},{},{},{}) does not fit in the {width}×{height} image",
+                self.name, self.x, self.y, self.w, self.h
+            ));
+        }
+        Ok(())
+    }
+
+    /// The row-major indices of its pixels in an image `width` wide.
+    pub fn indices(&self, width: u32) -> impl Iterator<Item = usize> + '_ {
+        (self.y..self.y + self.h).flat_map(move |y| {
+            (self.x..self.x + self.w).map(move |x| y as usize * width as usize + x as usize)
+        })
+    }
+}
+
+/// The metrics of `image` against `reference` (both `width` wide) over `region` only.
+pub fn region_metrics(image: &[Vec3], reference: &[Vec3], width: u32, region: &Region) -> Metrics {
+    let a: Vec<Vec3> = region.indices(width).map(|i| image[i]).collect();
+    let b: Vec<Vec3> = region.indices(width).map(|i| reference[i]).collect();
+    metrics(&a, &b)
+}
+
 /// Per-pixel relative squared error `(x − r)²/(r² + ε)`, averaged over channels: the error map.
 pub fn relative_error_map(image: &[Vec3], reference: &[Vec3]) -> Vec<f64> {
     check_sizes(image, reference);
@@ -277,6 +359,28 @@ mod tests {
         assert!((b.z.unwrap() - 6.0 / 12f64.sqrt()).abs() < 1e-9);
         assert!((b.max_pixel_z - 0.5f64.sqrt()).abs() < 1e-6);
         assert!((mean_variance(&[Vec3::new(1.0, 2.0, 3.0)]) - 2.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn regions_parse_and_select_their_pixels() {
+        let r = Region::parse("plate=1,2,3,4").unwrap();
+        assert_eq!((r.name.as_str(), r.x, r.y, r.w, r.h), ("plate", 1, 2, 3, 4));
+        assert_eq!(Region::parse("1,2,3,4").unwrap().name, "1,2,3,4");
+        for bad in ["1,2,3", "1,2,0,4", "a,b,c,d", "x y=1,2,3,4", "1,2,3,4,5"] {
+            assert!(Region::parse(bad).is_err(), "{bad}");
+        }
+        let list =
+            Region::parse_list("# plates\nleft 0,0,1,2\n\nright 1,0,1,2 # comment\n").unwrap();
+        assert_eq!(list.len(), 2);
+        assert!(Region::parse_list("left 0,0,1\n")
+            .unwrap_err()
+            .starts_with("line 1"));
+        assert!(list[1].check(2, 2).is_ok() && list[1].check(1, 2).is_err());
+        assert_eq!(list[1].indices(2).collect::<Vec<_>>(), vec![1, 3]);
+        let img = vec![Vec3::ZERO, Vec3::ONE, Vec3::ZERO, Vec3::ONE];
+        let m = region_metrics(&img, &[Vec3::ZERO; 4], 2, &list[0]);
+        assert_eq!(m.mse, 0.0);
+        assert_eq!(region_metrics(&img, &[Vec3::ZERO; 4], 2, &list[1]).mse, 1.0);
     }
 
     #[test]

@@ -44,6 +44,11 @@ impl Sampler for IndependentSampler {
     }
 
     #[inline]
+    fn skip(&mut self, n: u32) {
+        self.dim += n as u64;
+    }
+
+    #[inline]
     fn next_1d(&mut self) -> f32 {
         u64_to_unit_f32(self.next_hash())
     }

@@ -4,9 +4,11 @@
 //! | dimensions | decision |
 //! |---|---|
 //! | [`CAMERA_DIMS`] | the point in the pixel (2D) |
-//! | [`BOUNCE_DIMS`], at every vertex after the camera | lobe choice (1D), direction (2D), Russian roulette (1D) |
+//! | [`BOUNCE_DIMS`], at every vertex after the camera | light choice (1D), point on the light (2D), lobe choice (1D), direction (2D), Russian roulette (1D) |
 //!
-//! Every bounce draws all of its dimensions, used or not, so a dimension index means the same
+//! The light dimensions come first because next-event estimation happens first at a vertex.
+//! Every bounce draws all of its dimensions, used or not (`--lights bsdf` draws the light
+//! dimensions too), so a dimension index means the same
 //! decision in every sample — what stratification needs. [`CameraSample::draw`] and
 //! [`BounceSample::draw`] are the only code that draws them; tests and benchmarks walk the same
 //! tables.
@@ -25,7 +27,9 @@ pub enum Dim {
 pub const CAMERA_DIMS: [Dim; 1] = [Dim::Two("pixel position")];
 
 /// The dimensions of every bounce, in the order they are drawn.
-pub const BOUNCE_DIMS: [Dim; 3] = [
+pub const BOUNCE_DIMS: [Dim; 5] = [
+    Dim::One("light choice"),
+    Dim::Two("point on the light"),
     Dim::One("lobe choice"),
     Dim::Two("direction"),
     Dim::One("russian roulette"),
@@ -49,6 +53,10 @@ impl CameraSample {
 /// The numbers of one bounce.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BounceSample {
+    /// Chooses the light for next-event estimation.
+    pub light: f32,
+    /// Places the point on the light (or the environment direction).
+    pub light_point: Vec2,
     /// Picks the lobe of the Phong mixture.
     pub lobe: f32,
     /// Places the direction within the lobe.
@@ -58,13 +66,22 @@ pub struct BounceSample {
 }
 
 impl BounceSample {
-    /// Draw [`BOUNCE_DIMS`], in their order.
-    #[inline]
-    pub fn draw<S: Sampler>(s: &mut S) -> Self {
+    /// Draw [`BOUNCE_DIMS`], in their order. Without `lights` (BSDF sampling only) the light
+    /// dimensions are skipped, not drawn, and read as zero: the layout stays the same.
+    #[inline(always)]
+    pub fn draw<S: Sampler>(s: &mut S, lights: bool) -> Self {
+        let (light, light_point) = if lights {
+            (s.next_1d(), s.next_2d())
+        } else {
+            s.skip(2);
+            (0.0, Vec2::ZERO)
+        };
         let lobe = s.next_1d();
         let direction = s.next_2d();
         let roulette = s.next_1d();
         BounceSample {
+            light,
+            light_point,
             lobe,
             direction,
             roulette,
@@ -98,13 +115,23 @@ mod tests {
             a.start_pixel_sample(UVec2::new(1, 2), i);
             b.start_pixel_sample(UVec2::new(1, 2), i);
             let c = CameraSample::draw(&mut a);
-            let bo = BounceSample::draw(&mut a);
+            let bo = BounceSample::draw(&mut a, true);
             let dims: Vec<Dim> = CAMERA_DIMS.iter().chain(&BOUNCE_DIMS).copied().collect();
             let v = draw_dims(&mut b, &dims);
             assert_eq!(v[0], c.pixel);
-            assert_eq!(v[1].x, bo.lobe);
-            assert_eq!(v[2], bo.direction);
-            assert_eq!(v[3].x, bo.roulette);
+            assert_eq!(v[1].x, bo.light);
+            assert_eq!(v[2], bo.light_point);
+            assert_eq!(v[3].x, bo.lobe);
+            assert_eq!(v[4], bo.direction);
+            assert_eq!(v[5].x, bo.roulette);
+            // skipping the light dimensions leaves the others where they are
+            let mut c = a.clone();
+            c.start_pixel_sample(UVec2::new(1, 2), i);
+            CameraSample::draw(&mut c);
+            let skipped = BounceSample::draw(&mut c, false);
+            assert_eq!((skipped.light, skipped.light_point), (0.0, Vec2::ZERO));
+            assert_eq!((skipped.lobe, skipped.direction), (bo.lobe, bo.direction));
+            assert_eq!(skipped.roulette, bo.roulette);
         }
     }
 }

@@ -26,6 +26,9 @@ pub trait Sampler: Clone + Send + Sync {
     fn next_1d(&mut self) -> f32;
     /// The next 2D dimension of the current sample, in `[0, 1)^2`.
     fn next_2d(&mut self) -> Vec2;
+    /// Pass over `n` dimensions without drawing them (what `n` draws would do to the
+    /// dimension counter, at no cost).
+    fn skip(&mut self, n: u32);
 }
 
 /// Which sampler draws the points (the `--sampler` flag).

@@ -162,7 +162,7 @@ impl StratifiedSampler {
     }
 
     /// (stratum of the current sample, jitter hash) in the next dimension.
-    #[inline]
+    #[inline(always)]
     fn next_stratum(&mut self) -> (u32, u64) {
         let dk = mix64(self.key ^ self.dim.wrapping_mul(0xd6e8_feb8_6659_fd93));
         self.dim += 1;
@@ -187,6 +187,11 @@ impl Sampler for StratifiedSampler {
             ((self.n as u64) << 32) | pass as u64,
         ]);
         self.dim = 0;
+    }
+
+    #[inline]
+    fn skip(&mut self, n: u32) {
+        self.dim += n as u64;
     }
 
     #[inline]
