@@ -8,7 +8,7 @@ use glam::{UVec2, Vec2};
 use std::hint::black_box;
 use std::time::Duration;
 use vrpt::sampler::layout::{BounceSample, CameraSample, BOUNCE_DIMS, CAMERA_DIMS};
-use vrpt::sampler::{IndependentSampler, Sampler, StratifiedSampler};
+use vrpt::sampler::{IndependentSampler, Sampler, SobolSampler, StratifiedSampler};
 use vrpt::sampling::*;
 
 const SAMPLES: u32 = 4096;
@@ -39,6 +39,8 @@ fn samplers(c: &mut Criterion) {
     g.bench_function("independent", |b| b.iter(|| black_box(draw_path(&mut ind))));
     let mut st = StratifiedSampler::new(1, SAMPLES);
     g.bench_function("stratified", |b| b.iter(|| black_box(draw_path(&mut st))));
+    let mut so = SobolSampler::new(1);
+    g.bench_function("sobol", |b| b.iter(|| black_box(draw_path(&mut so))));
     g.finish();
 }
 

@@ -57,9 +57,10 @@ pub struct StrategyArgs {
     /// with it.
     #[arg(long, value_enum)]
     pub strategy: Option<Preset>,
-    /// Where sample points come from: independent (i.i.d. uniform) or stratified (jittered
+    /// Where sample points come from: independent (i.i.d. uniform), stratified (jittered
     /// strata per dimension; square spp such as 16, 64, 256 stratify best in 2D, a prime spp
-    /// gives N×1 slabs). Default: stratified.
+    /// gives N×1 slabs) or sobol (Owen-scrambled Sobol points, all dimensions stratified
+    /// jointly; powers of two stratify best). Default: stratified.
     #[arg(long, value_enum)]
     pub sampler: Option<SamplerKind>,
     /// How bounce directions are chosen: uniform (hemisphere), cosine (cosine-weighted) or

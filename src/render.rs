@@ -11,7 +11,7 @@ use crate::error::{Error, Result};
 use crate::film::Film;
 use crate::integrator::{radiance, IntegratorSettings, RayCounts};
 use crate::sampler::layout::CameraSample;
-use crate::sampler::{IndependentSampler, Sampler, SamplerKind, StratifiedSampler};
+use crate::sampler::{IndependentSampler, Sampler, SamplerKind, SobolSampler, StratifiedSampler};
 use crate::scene::Scene;
 use crate::strategy::Strategy;
 use glam::{DVec3, UVec2};
@@ -193,6 +193,13 @@ fn render_on_pool(
             camera,
             settings,
             StratifiedSampler::new(settings.seed, settings.spp),
+            progress,
+        ),
+        SamplerKind::Sobol => render_with(
+            scene,
+            camera,
+            settings,
+            SobolSampler::new(settings.seed),
             progress,
         ),
     }

@@ -152,9 +152,9 @@ fn bad_input_gives_one_line_and_nonzero_exit() {
         "--spp",
     );
     assert_one_line_error(
-        &vrpt(&["render", cb, "-o", o, "--sampler", "sobol"]),
+        &vrpt(&["render", cb, "-o", o, "--sampler", "halton"]),
         "sampler",
-        "sobol",
+        "halton",
     );
     assert_one_line_error(
         &vrpt(&["render", cb, "-o", o, "--bogus"]),

@@ -183,7 +183,9 @@ fn compare_on_checker_plane() {
 /// log spp: independent −1 (tolerance ±0.15: each mean MSE is known to ~3% from 8 runs, so the
 /// fitted slope over 5 points spanning a factor 256 to ~0.01); stratified ≤ −1.3 (theory −1.5
 /// for edges; pixels crossed by many edges near the horizon approach it only at higher N;
-/// measured −1.35 against −0.99, with a slope standard error of ~0.01).
+/// measured −1.35 against −0.99, with a slope standard error of ~0.01); sobol ≤ −1.4 (a pixel
+/// is a 2D integral here, where Owen-scrambled Sobol points converge at least as fast as
+/// jittered strata, and keep doing so at every power of two instead of one fixed N).
 #[test]
 fn converge_slopes_on_checker_plane() {
     let scene = common::shipped("checker-plane");
@@ -191,6 +193,7 @@ fn converge_slopes_on_checker_plane() {
     let strategies = [
         Strategy::parse("independent").unwrap(),
         Strategy::parse("stratified").unwrap(),
+        Strategy::parse("sobol+uniform").unwrap(),
     ];
     let c = converge(
         &scene,
@@ -222,7 +225,13 @@ fn converge_slopes_on_checker_plane() {
         "stratified slope {}",
         strat.mse_slope
     );
-    assert_eq!(c.points.len(), 10);
+    let sobol = c
+        .slopes
+        .iter()
+        .find(|s| s.strategy.starts_with("sobol"))
+        .unwrap();
+    assert!(sobol.mse_slope <= -1.4, "sobol slope {}", sobol.mse_slope);
+    assert_eq!(c.points.len(), 15);
 }
 
 fn as_image(scene: &Scene, s: &RenderSettings) -> RgbImage {

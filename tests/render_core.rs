@@ -165,7 +165,8 @@ fn white_furnace() {
 #[test]
 fn image_does_not_depend_on_thread_count() {
     let scene = vrpt::scene::load(&common::cornell_path()).unwrap();
-    for sampler in [SamplerKind::Independent, SamplerKind::Stratified] {
+    use clap::ValueEnum;
+    for &sampler in SamplerKind::value_variants() {
         let mut settings = RenderSettings {
             width: 40,
             height: 40,

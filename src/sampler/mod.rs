@@ -8,9 +8,11 @@
 
 mod independent;
 pub mod layout;
+mod sobol;
 mod stratified;
 
 pub use independent::IndependentSampler;
+pub use sobol::SobolSampler;
 pub use stratified::{grid_shape, permute_index, StratifiedSampler};
 
 use glam::{UVec2, Vec2};
@@ -40,6 +42,9 @@ pub enum SamplerKind {
     /// in a hashed order that differs per dimension.
     #[default]
     Stratified,
+    /// Owen-scrambled Sobol points (Burley 2020): every dimension of the path jointly
+    /// stratified, one scrambled sequence per pixel.
+    Sobol,
 }
 
 impl std::fmt::Display for SamplerKind {
