@@ -61,15 +61,16 @@ pub struct BsdfSample {
     pub pdf: f32,
 }
 
-/// The modified Phong BSDF at one surface point.
+/// The modified Phong BSDF at one surface point (built by [`Bsdf::new`], which derives the
+/// lobe probability from the reflectances, so the fields are not public).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Bsdf {
     /// Diffuse reflectance.
-    pub kd: Vec3,
+    kd: Vec3,
     /// Specular reflectance.
-    pub ks: Vec3,
+    ks: Vec3,
     /// Phong exponent.
-    pub exponent: f32,
+    exponent: f32,
     /// Probability of choosing the diffuse lobe in `phong` sampling.
     p_diffuse: f32,
 }

@@ -6,18 +6,19 @@
 use crate::bsdf::Bsdf;
 use glam::Vec3;
 
-/// A modified Phong material with optional one-sided emission.
+/// A modified Phong material with optional one-sided emission. The reflectances are read
+/// through methods: the BSDF is built from them once, so they cannot change behind its back.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
     pub name: String,
-    /// Diffuse reflectance.
-    pub kd: Vec3,
-    /// Specular reflectance.
-    pub ks: Vec3,
-    /// Phong exponent (MTL `Ns`).
-    pub exponent: f32,
     /// Emitted radiance (MTL `Ke`), on the front side only.
     pub emission: Vec3,
+    /// Diffuse reflectance.
+    kd: Vec3,
+    /// Specular reflectance.
+    ks: Vec3,
+    /// Phong exponent (MTL `Ns`).
+    exponent: f32,
     /// The BSDF built from kd, ks and the exponent once, for surfaces without texture.
     bsdf: Bsdf,
 }
@@ -51,6 +52,21 @@ impl Material {
     /// A diffuse material of reflectance `kd`.
     pub fn diffuse(name: &str, kd: Vec3) -> Self {
         Material::new(name, kd, Vec3::ZERO, 1.0, Vec3::ZERO).0
+    }
+
+    /// Diffuse reflectance (after energy scaling).
+    pub fn kd(&self) -> Vec3 {
+        self.kd
+    }
+
+    /// Specular reflectance (after energy scaling).
+    pub fn ks(&self) -> Vec3 {
+        self.ks
+    }
+
+    /// Phong exponent (MTL `Ns`).
+    pub fn exponent(&self) -> f32 {
+        self.exponent
     }
 
     /// The BSDF of this material where it has no texture.

@@ -52,9 +52,9 @@ fn obj_with_mtl_loads_triangles_materials_and_emitters() {
     assert_eq!(s.materials.len(), 4);
     let shiny = s.materials.iter().find(|m| m.name == "shiny").unwrap();
     // Kd + Ks = 1.2 in red: both scaled by 1/1.2 in that channel only
-    assert!((shiny.kd - Vec3::new(0.5, 0.5, 0.4)).length() < 1e-6);
-    assert!((shiny.ks - Vec3::new(0.5, 0.2, 0.1)).length() < 1e-6);
-    assert_eq!(shiny.exponent, 50.0);
+    assert!((shiny.kd() - Vec3::new(0.5, 0.5, 0.4)).length() < 1e-6);
+    assert!((shiny.ks() - Vec3::new(0.5, 0.2, 0.1)).length() < 1e-6);
+    assert_eq!(shiny.exponent(), 50.0);
     let lamp = s.materials.iter().find(|m| m.name == "lamp").unwrap();
     assert_eq!(lamp.emission, Vec3::new(10.0, 8.0, 6.0));
     assert_eq!(s.lights.len(), 1);

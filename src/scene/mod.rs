@@ -234,8 +234,8 @@ fn content_hash(mesh: &Mesh, materials: &[Material], camera: &CameraDesc, env: V
         w.push(t.material as u64);
     }
     for m in materials {
-        put(&mut w, &[m.kd, m.ks, m.emission]);
-        w.push(m.exponent.to_bits() as u64);
+        put(&mut w, &[m.kd(), m.ks(), m.emission]);
+        w.push(m.exponent().to_bits() as u64);
     }
     put(&mut w, &[camera.eye, camera.target, camera.up, env]);
     w.push(camera.fov_deg.to_bits() as u64);
