@@ -5,21 +5,21 @@
 
 mod common;
 
-use common::render_quiet;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::sync::OnceLock;
-use vrpt::analysis::experiments::{compare, converge, ExperimentSettings, Silent};
+use vrpt::analysis::experiments::{compare, converge, Silent};
 use vrpt::analysis::merge::{merge, MergeInput};
 use vrpt::image_io::{read_exr, write_exr, RgbImage};
 use vrpt::output::RenderMetadata;
-use vrpt::render::{RenderSettings, RenderStats};
+use vrpt::render::RenderSettings;
 use vrpt::sampler::SamplerKind;
 use vrpt::scene::Scene;
 use vrpt::stats::sidak;
 use vrpt::strategy::{Preset, Strategy};
 
-/// A converged reference: `spp` samples of stratified + phong, as the EXR would hold it.
+/// A converged reference: `spp` samples of the default strategy (stratified, phong, MIS), as
+/// the EXR would hold it.
 fn reference(scene: &Scene, w: u32, h: u32, spp: u32, max_depth: u32) -> RgbImage {
     let s = RenderSettings {
         width: w,
@@ -29,19 +29,7 @@ fn reference(scene: &Scene, w: u32, h: u32, spp: u32, max_depth: u32) -> RgbImag
         seed: 999,
         ..Default::default()
     };
-    as_image(scene, &s)
-}
-
-fn settings(w: u32, h: u32, max_depth: u32, runs: u32) -> ExperimentSettings {
-    ExperimentSettings {
-        width: w,
-        height: h,
-        max_depth,
-        seed: 1,
-        runs,
-        threads: None,
-        regions: Vec::new(),
-    }
+    common::as_image(scene, &s)
 }
 
 /// Family-wise α = 0.01 over the bias tests of this file (2 scenes × 4 strategies).
@@ -74,7 +62,7 @@ fn compare_presets(
         &Preset::mission(),
         spp,
         None,
-        &settings(w, h, max_depth, 16),
+        &common::experiment_settings(w, h, max_depth, 16),
         &Silent,
     )
     .unwrap();
@@ -200,7 +188,7 @@ fn converge_slopes_on_checker_plane() {
         checker_reference(&scene),
         &strategies,
         &[4, 16, 64, 256, 1024],
-        &settings(w, h, d, 8),
+        &common::experiment_settings(w, h, d, 8),
         &Silent,
     )
     .unwrap();
@@ -232,17 +220,6 @@ fn converge_slopes_on_checker_plane() {
         .unwrap();
     assert!(sobol.mse_slope <= -1.4, "sobol slope {}", sobol.mse_slope);
     assert_eq!(c.points.len(), 15);
-}
-
-fn as_image(scene: &Scene, s: &RenderSettings) -> RgbImage {
-    let (film, stats): (_, RenderStats) = render_quiet(scene, s);
-    RgbImage {
-        width: s.width,
-        height: s.height,
-        pixels: film.mean_image(),
-        variance: Some(film.variance_image()),
-        metadata: RenderMetadata::new(scene, s, &stats).to_attributes(),
-    }
 }
 
 /// A merge input made in memory, named `name`.
@@ -293,16 +270,16 @@ fn merge_of_two_halves_equals_one_render() {
                 metadata: RenderMetadata::new(&scene, &full, &st).to_attributes(),
             }
         } else {
-            as_image(&scene, &full)
+            common::as_image(&scene, &full)
         };
-        let a = as_image(
+        let a = common::as_image(
             &scene,
             &RenderSettings {
                 spp: 32,
                 ..full.clone()
             },
         );
-        let b = as_image(
+        let b = common::as_image(
             &scene,
             &RenderSettings {
                 spp: 32,

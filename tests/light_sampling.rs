@@ -274,7 +274,7 @@ fn veach_picture_on_the_glossy_plates() {
         .collect();
     assert_eq!(regions.len(), 16);
     let (w, h, depth) = (128, 96, 4);
-    let (film, stats) = common::render_quiet(
+    let reference = common::as_image(
         &scene,
         &vrpt::render::RenderSettings {
             width: w,
@@ -285,36 +285,13 @@ fn veach_picture_on_the_glossy_plates() {
             ..Default::default()
         },
     );
-    let reference = vrpt::image_io::RgbImage {
-        width: w,
-        height: h,
-        pixels: film.mean_image(),
-        variance: Some(film.variance_image()),
-        metadata: vrpt::output::RenderMetadata::new(
-            &scene,
-            &vrpt::render::RenderSettings {
-                width: w,
-                height: h,
-                spp: 1024,
-                max_depth: depth,
-                ..Default::default()
-            },
-            &stats,
-        )
-        .to_attributes(),
-    };
     let strategies: Vec<Strategy> = ["stratified+phong+bsdf", "stratified+phong+nee", "mis"]
         .iter()
         .map(|s| Strategy::parse(s).unwrap())
         .collect();
     let settings = ExperimentSettings {
-        width: w,
-        height: h,
-        max_depth: depth,
-        seed: 1,
-        runs: 8,
-        threads: None,
         regions: regions.clone(),
+        ..common::experiment_settings(w, h, depth, 8)
     };
     let c = compare(
         &scene,

@@ -6,12 +6,9 @@
 mod common;
 
 use glam::{UVec2, Vec2};
-use vrpt::analysis::experiments::{converge, ExperimentSettings, Silent};
-use vrpt::image_io::RgbImage;
-use vrpt::output::RenderMetadata;
+use vrpt::analysis::experiments::{converge, Silent};
 use vrpt::render::RenderSettings;
 use vrpt::sampler::{Sampler, SobolSampler};
-use vrpt::scene::Scene;
 use vrpt::stats::{normal_critical_value, sidak};
 use vrpt::strategy::Strategy;
 
@@ -127,30 +124,6 @@ fn unbiased_on_a_known_integral() {
     assert!(sd < 0.25 * 0.49 / 8.0, "sd {sd}");
 }
 
-/// A converged reference rendered in the test, as an EXR would hold it.
-fn reference(scene: &Scene, s: &RenderSettings) -> RgbImage {
-    let (film, stats) = common::render_quiet(scene, s);
-    RgbImage {
-        width: s.width,
-        height: s.height,
-        pixels: film.mean_image(),
-        variance: Some(film.variance_image()),
-        metadata: RenderMetadata::new(scene, s, &stats).to_attributes(),
-    }
-}
-
-fn experiment(w: u32, h: u32, max_depth: u32, runs: u32) -> ExperimentSettings {
-    ExperimentSettings {
-        width: w,
-        height: h,
-        max_depth,
-        seed: 1,
-        runs,
-        threads: None,
-        regions: Vec::new(),
-    }
-}
-
 /// The padding limit on the shipped lit-checker (32×24, NEE, depth 2: a 4D pixel × light-point
 /// integral with edges): independent −1, padded strata stall (measured −1.14 at 128×96),
 /// Sobol steeper (−1.63 there). Asserted: independent within −1 ± 0.15 and sobol at least 0.2
@@ -160,7 +133,7 @@ fn experiment(w: u32, h: u32, max_depth: u32, runs: u32) -> ExperimentSettings {
 fn lit_checker_sobol_beats_padded_strata() {
     let scene = common::shipped("lit-checker");
     let (w, h) = (32, 24);
-    let r = reference(
+    let r = common::as_image(
         &scene,
         &RenderSettings {
             width: w,
@@ -181,7 +154,7 @@ fn lit_checker_sobol_beats_padded_strata() {
         &r,
         &strategies,
         &[4, 16, 64, 256, 1024],
-        &experiment(w, h, 2, 6),
+        &common::experiment_settings(w, h, 2, 6),
         &Silent,
     )
     .unwrap();
@@ -206,7 +179,7 @@ fn lit_checker_sobol_beats_padded_strata() {
 fn cornell_box_with_mis_every_stratifying_sampler_beats_independent() {
     let scene = common::shipped("cornell-box");
     let (w, h) = (32, 32);
-    let r = reference(
+    let r = common::as_image(
         &scene,
         &RenderSettings {
             width: w,
@@ -227,7 +200,7 @@ fn cornell_box_with_mis_every_stratifying_sampler_beats_independent() {
         &r,
         &strategies,
         &spps,
-        &experiment(w, h, 8, 6),
+        &common::experiment_settings(w, h, 8, 6),
         &Silent,
     )
     .unwrap();

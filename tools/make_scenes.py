@@ -490,13 +490,9 @@ def glossy_plates():
 
 
 # ================================================================ 3. checker
-def checker_plane():
-    name = "checker-plane"
-    m = Mesh(name)
-    m.material("check_a", (0.0, 0.0, 0.0), ke=(1.0, 1.0, 1.0))
-    m.material("check_b", (0.0, 0.0, 0.0), ke=(0.05, 0.05, 0.05))
-    nx, nz = 24, 40
-    x0, z0 = -12.0, -2.0
+def checkerboard(m, nx, nz, x0, z0):
+    """Unit squares in the plane y = 0, nx along +x from x0 and nz along -z
+    from z0, alternating materials check_a / check_b, normals up."""
     squares = {"check_a": [], "check_b": []}
     for j in range(nz):
         for i in range(nx):
@@ -510,6 +506,14 @@ def checker_plane():
         for q in squares[mat]:
             m.face(q, direction=(0, 1, 0))
     assert len(squares["check_a"]) + len(squares["check_b"]) == nx * nz
+
+
+def checker_plane():
+    name = "checker-plane"
+    m = Mesh(name)
+    m.material("check_a", (0.0, 0.0, 0.0), ke=(1.0, 1.0, 1.0))
+    m.material("check_b", (0.0, 0.0, 0.0), ke=(0.05, 0.05, 0.05))
+    checkerboard(m, 24, 40, -12.0, -2.0)
 
     folder = os.path.join(SCENES, name)
     m.write(folder)
@@ -532,20 +536,7 @@ def lit_checker():
     m.material("check_a", (0.8, 0.8, 0.8))
     m.material("check_b", (0.05, 0.05, 0.05))
     m.material("light", (0.0, 0.0, 0.0), ke=(3.0, 3.0, 3.0))
-    nx, nz = 12, 12
-    x0, z0 = -6.0, 1.0
-    squares = {"check_a": [], "check_b": []}
-    for j in range(nz):
-        for i in range(nx):
-            xa, xb = x0 + i, x0 + i + 1
-            za, zb = z0 - j, z0 - j - 1
-            quad = [(xa, 0.0, za), (xb, 0.0, za), (xb, 0.0, zb),
-                    (xa, 0.0, zb)]
-            squares["check_a" if (i + j) % 2 == 0 else "check_b"].append(quad)
-    for mat in ("check_a", "check_b"):
-        m.group(mat, mat)
-        for q in squares[mat]:
-            m.face(q, direction=(0, 1, 0))
+    checkerboard(m, 12, 12, -6.0, 1.0)
     m.group("light", "light")
     ly, lz = 1.0, -4.0
     m.face([(-1.0, ly, lz - 1.0), (1.0, ly, lz - 1.0), (1.0, ly, lz + 1.0),

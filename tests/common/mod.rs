@@ -3,7 +3,10 @@
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
+use vrpt::analysis::experiments::ExperimentSettings;
 use vrpt::film::Film;
+use vrpt::image_io::RgbImage;
+use vrpt::output::RenderMetadata;
 use vrpt::render::{render, NoProgress, RenderSettings, RenderStats};
 use vrpt::scene::Scene;
 
@@ -51,4 +54,29 @@ pub fn icosphere_obj(r: f32, subdivisions: u32, material: &str) -> String {
 /// Render quietly.
 pub fn render_quiet(scene: &Scene, settings: &RenderSettings) -> (Film, RenderStats) {
     render(scene, settings, &NoProgress).unwrap()
+}
+
+/// Render quietly and return the image as an EXR would hold it (mean, variance, metadata).
+pub fn as_image(scene: &Scene, s: &RenderSettings) -> RgbImage {
+    let (film, stats) = render_quiet(scene, s);
+    RgbImage {
+        width: s.width,
+        height: s.height,
+        pixels: film.mean_image(),
+        variance: Some(film.variance_image()),
+        metadata: RenderMetadata::new(scene, s, &stats).to_attributes(),
+    }
+}
+
+/// Experiment settings for `runs` runs from seed 1 on all cores, no regions.
+pub fn experiment_settings(w: u32, h: u32, max_depth: u32, runs: u32) -> ExperimentSettings {
+    ExperimentSettings {
+        width: w,
+        height: h,
+        max_depth,
+        seed: 1,
+        runs,
+        threads: None,
+        regions: Vec::new(),
+    }
 }
