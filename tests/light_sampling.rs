@@ -49,7 +49,7 @@ fn light_choice_is_proportional_to_power() {
         assert!((s - 0.25).abs() < 1e-4, "light {l}: {s}");
     }
     let n = 1_000_000;
-    let mut rng = SmallRng::seed_from_u64(1);
+    let mut rng = SmallRng::seed_from_u64(common::seed(1));
     let mut counts = vec![0f64; 80];
     for _ in 0..n {
         let i = lights.choose(rng.random()).expect("a triangle");
@@ -69,7 +69,7 @@ fn light_choice_is_proportional_to_power() {
 fn triangle_points_are_uniform_by_area() {
     let k = 20usize;
     let n = 400_000;
-    let mut rng = SmallRng::seed_from_u64(2);
+    let mut rng = SmallRng::seed_from_u64(common::seed(2));
     let mut counts = vec![0f64; 2 * k * k];
     for _ in 0..n {
         let b = sample_uniform_triangle(Vec2::new(rng.random(), rng.random()));
@@ -174,7 +174,7 @@ fn solid_angle_pdf_integrates_to_the_light_choice() {
 #[test]
 fn mis_weights_of_both_strategies_sum_to_one() {
     let scene = common::shipped("cornell-box");
-    let mut rng = SmallRng::seed_from_u64(3);
+    let mut rng = SmallRng::seed_from_u64(common::seed(3));
     let mut checked = [0usize; 3];
     let cam = vrpt::camera::Camera::new(&scene.camera, 64, 64).unwrap();
     for _ in 0..20_000 {
@@ -216,9 +216,15 @@ fn mis_weights_of_both_strategies_sum_to_one() {
         };
         let y = scene.surface(&h2).p;
         let p_light_at_hit = scene.lights.triangle_pdf(light, s.p, y);
+        // The ray leaves from the offset origin (ε along the normal), as in the integrator, so
+        // it meets the light up to ~ε/cosθ_l from the sampled point: a relative pdf change of
+        // ~ε/(d cosθ_l), large only at grazing angles (measured 0.4% at cosθ_l ~ 1e-3), where
+        // the weight sum moves by at most half of it.
+        let cos_l = -scene.lights.triangles[light as usize].n.dot(ls.wi);
+        let tolerance = 1e-3 + 4.0 * scene.ray_epsilon / (ls.dist * cos_l);
         assert!(
-            (p_light_at_hit - ls.pdf).abs() <= 2e-3 * ls.pdf,
-            "light pdf {} from the hit vs {} from the sample",
+            (p_light_at_hit - ls.pdf).abs() <= tolerance * ls.pdf,
+            "light pdf {} from the hit vs {} from the sample (cosθ_l {cos_l})",
             p_light_at_hit,
             ls.pdf
         );
@@ -231,7 +237,10 @@ fn mis_weights_of_both_strategies_sum_to_one() {
                 continue;
             }
             let sum = mis_weight(ls.pdf, p_bsdf) + mis_weight(p_bsdf, p_light_at_hit);
-            assert!((sum - 1.0).abs() < 2e-3, "{dirs}: weights sum to {sum}");
+            assert!(
+                (sum - 1.0).abs() <= 1e-4 + 0.5 * tolerance,
+                "{dirs}: weights sum to {sum}"
+            );
             checked[k] += 1;
         }
     }
@@ -281,7 +290,7 @@ fn veach_picture_on_the_glossy_plates() {
             height: h,
             spp: 1024,
             max_depth: depth,
-            seed: 999,
+            seed: common::seed(999),
             ..Default::default()
         },
     );

@@ -24,7 +24,7 @@ fn first_two_dimensions_are_a_0_2_sequence() {
             (7, UVec2::new(13, 2)),
             (99, UVec2::new(400, 300)),
         ] {
-            let mut s = SobolSampler::new(seed);
+            let mut s = SobolSampler::new(common::seed(seed));
             let pts: Vec<Vec2> = (0..n)
                 .map(|i| {
                     s.start_pixel_sample(pixel, i);
@@ -65,7 +65,7 @@ fn first_two_dimensions_are_a_0_2_sequence() {
 #[test]
 fn pixels_are_independent() {
     let n = 256u32;
-    let mut s = SobolSampler::new(3);
+    let mut s = SobolSampler::new(common::seed(3));
     let draws = |s: &mut SobolSampler, p: UVec2, d: usize| -> Vec<f64> {
         (0..n)
             .map(|i| {
@@ -102,7 +102,7 @@ fn pixels_are_independent() {
 fn unbiased_on_a_known_integral() {
     let truth = (std::f64::consts::E - 1.0).powi(2);
     let (n, r) = (64u32, 400u32);
-    let mut s = SobolSampler::new(11);
+    let mut s = SobolSampler::new(common::seed(11));
     let est: Vec<f64> = (0..r)
         .map(|k| {
             (0..n)
@@ -140,7 +140,7 @@ fn lit_checker_sobol_beats_padded_strata() {
             height: h,
             spp: 16384,
             max_depth: 2,
-            seed: 77,
+            seed: common::seed(77),
             strategy: Strategy::parse("sobol+cosine+nee").unwrap(),
             ..Default::default()
         },
@@ -171,10 +171,14 @@ fn lit_checker_sobol_beats_padded_strata() {
 }
 
 /// The seed's promise on the shipped Cornell box once light sampling is on (MIS, phong,
-/// 32×32, 6 runs per point, against a 32768-spp MIS reference): at every spp from 4 to 1024,
-/// Sobol's MSE is at most independent's, and stratified's at most independent's × N/(N−1)
-/// (Owen's bound for Latin-hypercube-like padded strata). Measured ratios to independent:
-/// sobol 0.17–0.47, stratified 0.22–0.62, so the bounds hold with a factor of 2 or more.
+/// 32×32, against a 32768-spp MIS reference): at every spp from 4 to 1024, Sobol's MSE is at
+/// most independent's, and stratified's at most independent's × N/(N−1) (Owen's bound for
+/// Latin-hypercube-like padded strata). At low spp a run's MSE is dominated by the rare
+/// caustic paths of the glossy box, so it swings between seed sets (independent at 4 spp:
+/// 2.5e-2 to 4.6e-2 over 6 runs, and once below Sobol's); the points at 4–64 spp are therefore
+/// averaged over 48 runs (√8 ≈ 2.8× steadier), those at 256 and 1024 over 6. Measured ratios
+/// to independent: sobol 0.2–0.6, stratified 0.2–0.7. Checked over five seed sets
+/// (`VRPT_TEST_SEED=0..4`).
 #[test]
 fn cornell_box_with_mis_every_stratifying_sampler_beats_independent() {
     let scene = common::shipped("cornell-box");
@@ -186,38 +190,43 @@ fn cornell_box_with_mis_every_stratifying_sampler_beats_independent() {
             height: h,
             spp: 32768,
             max_depth: 8,
-            seed: 9,
+            seed: common::seed(9),
             ..Default::default()
         },
     );
-    let spps = [4u32, 16, 64, 256, 1024];
     let strategies: Vec<Strategy> = ["independent", "stratified", "sobol"]
         .iter()
         .map(|s| Strategy::parse(&format!("{s}+phong+mis")).unwrap())
         .collect();
-    let c = converge(
-        &scene,
-        &r,
-        &strategies,
-        &spps,
-        &common::experiment_settings(w, h, 8, 6),
-        &Silent,
-    )
-    .unwrap();
-    eprint!("{}", c.table());
+    let mut points = Vec::new();
+    let mut tables = String::new();
+    for (spps, runs) in [(vec![4u32, 16, 64], 48), (vec![256, 1024], 6)] {
+        let c = converge(
+            &scene,
+            &r,
+            &strategies,
+            &spps,
+            &common::experiment_settings(w, h, 8, runs),
+            &Silent,
+        )
+        .unwrap();
+        tables += &c.table();
+        points.extend(c.points);
+    }
+    eprint!("{tables}");
     let mse = |name: &str, spp: u32| {
-        c.points
+        points
             .iter()
             .find(|p| p.strategy.starts_with(name) && p.spp == spp)
             .unwrap()
             .mse
     };
-    for n in spps {
+    for n in [4u32, 16, 64, 256, 1024] {
         let ind = mse("independent", n);
-        assert!(mse("sobol", n) <= ind, "{n} spp\n{}", c.table());
+        assert!(mse("sobol", n) <= ind, "{n} spp\n{tables}");
         let bound = ind * n as f64 / (n - 1) as f64;
         // the stratified preset with MIS is named "mis"
-        assert!(mse("mis", n) <= bound, "{n} spp\n{}", c.table());
+        assert!(mse("mis", n) <= bound, "{n} spp\n{tables}");
     }
 }
 
@@ -248,7 +257,7 @@ fn renders_past_two_to_the_sixteen_samples() {
         &scene,
         &RenderSettings {
             spp: 4096,
-            seed: 5,
+            seed: common::seed(5),
             ..base
         },
     );

@@ -198,6 +198,16 @@ fn big_light_broad_lobe_cornell_box_agrees_for_every_sampler_and_direction_strat
 /// be. Bound: Šidák's two-sided critical value at family-wise α = 10⁻³ over all
 /// strategies × regions × channels.
 ///
+/// The variance is the **larger** of the pilot's and the render's own. Rare, huge samples
+/// remain even with light sampling (caustics of the glossy box: light → box → wall, found by
+/// BSDF sampling; worst with cosine directions, which ignore the lobe): a render that caught
+/// one has a mean several pilot-σ high (measured: z = 7.2 with the pilot's variance alone, in
+/// one region of one seed set of five, at pooled ESS 87,000, while the same strategy's worst
+/// z over the other seed sets was 2.3) — and then its own variance is high too. A render that
+/// missed them is low by less than the pilot's σ, which holds them. Taking the larger keeps
+/// the test valid both ways; a bias shifts whole regions of every seed set, and the power check
+/// below still fails by z = 16.
+///
 /// Power: a wrong light pdf under NEE (every light sample divided by 1.05 too many, which in
 /// `nee` mode is exactly the image of a light with Ke/1.05 everywhere but on the light itself)
 /// must fail in most regions.
@@ -217,7 +227,7 @@ fn shipped_cornell_box_agrees_for_every_light_strategy() {
         &scene,
         &RenderSettings {
             spp: 65536,
-            seed: 1000,
+            seed: common::seed(1000),
             ..base.clone()
         },
     );
@@ -284,8 +294,10 @@ fn shipped_cornell_box_agrees_for_every_light_strategy() {
         let (mut worst, mut tested, mut failed) = (0.0f64, 0usize, 0usize);
         for k in 0..m.len() {
             for c in 0..3 {
-                let (mean, _, _) = m[k][c];
-                let (_, var, ess) = p[k][c];
+                let (mean, own_var, _) = m[k][c];
+                let (_, pilot_var, ess) = p[k][c];
+                // the larger of the two variance estimates (see the doc comment)
+                let var = own_var.max(pilot_var);
                 let (rmean, rvar, _) = reference[k][c];
                 if ess < 300.0 || var + rvar == 0.0 {
                     continue;
@@ -295,6 +307,11 @@ fn shipped_cornell_box_agrees_for_every_light_strategy() {
                 worst = worst.max(z);
                 if z > z_crit {
                     failed += 1;
+                    eprintln!(
+                        "{name} {strategy}: region {k} channel {c}: {mean:.5} vs reference \
+                         {rmean:.5} (σ {:.5}, pooled ESS {ess:.0}, z {z:.2})",
+                        (var + rvar).sqrt()
+                    );
                 }
             }
         }
@@ -315,7 +332,12 @@ fn shipped_cornell_box_agrees_for_every_light_strategy() {
             directions,
             lights,
         };
-        let (_, failed) = judge("shipped cornell", &scene, strategy, 20 + 1000 * k as u64);
+        let (_, failed) = judge(
+            "shipped cornell",
+            &scene,
+            strategy,
+            common::seed(20 + 1000 * k as u64),
+        );
         assert_eq!(failed, 0, "{strategy} disagrees with the reference");
     }
     // the power check: NEE with every light sample 1/1.05 too small
@@ -337,7 +359,7 @@ fn shipped_cornell_box_agrees_for_every_light_strategy() {
         directions: Directions::Phong,
         lights: LightStrategy::Nee,
     };
-    let (tested, failed) = judge("light pdf x1.05", &wrong, strategy, 20 + 1000);
+    let (tested, failed) = judge("light pdf x1.05", &wrong, strategy, common::seed(20 + 1000));
     assert!(
         2 * failed >= tested,
         "a 5% error in the light pdf must fail most regions ({failed} of {tested})"

@@ -10,6 +10,17 @@ use vrpt::output::RenderMetadata;
 use vrpt::render::{render, NoProgress, RenderSettings, RenderStats};
 use vrpt::scene::Scene;
 
+/// `base` shifted by `VRPT_TEST_SEED` (default 0): the statistical tests take their seeds
+/// through this, so they can be rerun with other random streams (`VRPT_TEST_SEED=3 cargo test`)
+/// to check that they hold for any seed, not just the committed ones.
+pub fn seed(base: u64) -> u64 {
+    let offset: u64 = std::env::var("VRPT_TEST_SEED")
+        .ok()
+        .and_then(|s| s.trim().parse().ok())
+        .unwrap_or(0);
+    base.wrapping_add(offset.wrapping_mul(1_000_003))
+}
+
 /// The shipped Cornell box.
 pub fn cornell_path() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-box")
@@ -74,7 +85,7 @@ pub fn experiment_settings(w: u32, h: u32, max_depth: u32, runs: u32) -> Experim
         width: w,
         height: h,
         max_depth,
-        seed: 1,
+        seed: seed(1),
         runs,
         threads: None,
         regions: Vec::new(),
