@@ -194,13 +194,13 @@ impl Sampler for StratifiedSampler {
         self.dim += n as u64;
     }
 
-    #[inline]
+    #[inline(always)]
     fn next_1d(&mut self) -> f32 {
         let (s, h) = self.next_stratum();
         (jitter_in(s, u64_to_unit_f32(h)) * self.inv.0).min(ONE_MINUS_EPSILON)
     }
 
-    #[inline]
+    #[inline(always)]
     fn next_2d(&mut self) -> Vec2 {
         let (s, h) = self.next_stratum();
         let sy = self.div_a.div(s);
