@@ -125,7 +125,7 @@ pub fn radiance<S: Sampler>(
                     mis_weight(v.pdf, scene.lights.environment_pdf(v.n, dir))
                 }
             };
-            l += beta * scene.environment * w;
+            l += beta * scene.environment() * w;
             break;
         };
         let s = scene.surface(&hit);

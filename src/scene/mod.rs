@@ -74,8 +74,6 @@ pub struct Scene {
     /// The emissive triangles, and which primitive is which light.
     pub lights: Lights,
     pub camera: CameraDesc,
-    /// Radiance of rays that escape.
-    pub environment: Vec3,
     /// Defaults from `scene.toml` (flags override them).
     pub defaults: RenderSection,
     /// Origin offset along the geometric normal for spawned rays, scaled to the scene.
@@ -170,7 +168,6 @@ impl Scene {
             materials,
             lights,
             camera,
-            environment,
             defaults: options.defaults,
             ray_epsilon: 1e-5 * extent.max(1e-3),
             warnings,
@@ -203,6 +200,12 @@ impl Scene {
             uv: sh.uvs[0] * b0 + sh.uvs[1] * hit.b1 + sh.uvs[2] * hit.b2,
             material: sh.material,
         }
+    }
+
+    /// Radiance of rays that escape (the environment light's, kept in [`Lights`]).
+    #[inline]
+    pub fn environment(&self) -> Vec3 {
+        self.lights.environment
     }
 
     /// The BSDF at a surface point: the one place where a texture would enter.
