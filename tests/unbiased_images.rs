@@ -42,12 +42,30 @@ mod common;
 use common::render_quiet;
 use std::path::Path;
 use vrpt::bsdf::Directions;
+use vrpt::film::Film;
 use vrpt::lights::LightStrategy;
 use vrpt::render::RenderSettings;
 use vrpt::sampler::SamplerKind;
 use vrpt::scene::Scene;
 use vrpt::stats::{normal_critical_value, sidak};
 use vrpt::strategy::Strategy;
+
+/// A render, and a pilot: a second, independent render of the same settings (seed + 500),
+/// whose variance is not correlated with the first render's mean. Neither may hold a
+/// non-finite sample.
+fn render_with_pilot(scene: &Scene, settings: &RenderSettings) -> (Film, Film) {
+    let (film, stats) = render_quiet(scene, settings);
+    assert_eq!(stats.nonfinite, 0);
+    let (pilot, stats) = render_quiet(
+        scene,
+        &RenderSettings {
+            seed: settings.seed + 500,
+            ..settings.clone()
+        },
+    );
+    assert_eq!(stats.nonfinite, 0);
+    (film, pilot)
+}
 
 fn check_all_combinations(name: &str, scene: &Scene, max_depth: u32) {
     let base = RenderSettings {
@@ -100,16 +118,7 @@ fn check_all_combinations(name: &str, scene: &Scene, max_depth: u32) {
                 seed,
                 ..base.clone()
             };
-            let (film, stats) = render_quiet(scene, &settings);
-            assert_eq!(stats.nonfinite, 0);
-            // the variance, from an independent render of the same combination
-            let (pilot, _) = render_quiet(
-                scene,
-                &RenderSettings {
-                    seed: seed + 500,
-                    ..settings
-                },
-            );
+            let (film, pilot) = render_with_pilot(scene, &settings);
             let (mut worst, mut tested) = (0.0f64, 0usize);
             for i in 0..pixels {
                 let ess = pilot.effective_samples(i);
@@ -242,7 +251,7 @@ fn shipped_cornell_box_agrees_for_every_light_strategy() {
     let tests = strategies.len() * nb * nb * 3;
     let z_crit = normal_critical_value(sidak(1e-3, tests));
     // (region mean, its variance, pooled ESS) per region and channel
-    let regions = |film: &vrpt::film::Film| -> Vec<[(f64, f64, f64); 3]> {
+    let regions = |film: &Film| -> Vec<[(f64, f64, f64); 3]> {
         let mut out = Vec::new();
         for by in 0..nb as u32 {
             for bx in 0..nb as u32 {
@@ -281,15 +290,7 @@ fn shipped_cornell_box_agrees_for_every_light_strategy() {
             seed,
             ..base.clone()
         };
-        let (film, stats) = render_quiet(scene, &settings);
-        assert_eq!(stats.nonfinite, 0);
-        let (pilot, _) = render_quiet(
-            scene,
-            &RenderSettings {
-                seed: seed + 500,
-                ..settings
-            },
-        );
+        let (film, pilot) = render_with_pilot(scene, &settings);
         let (m, p) = (regions(&film), regions(&pilot));
         let (mut worst, mut tested, mut failed) = (0.0f64, 0usize, 0usize);
         for k in 0..m.len() {
