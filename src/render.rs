@@ -36,6 +36,8 @@ pub struct RenderSettings {
     pub strategy: Strategy,
     /// Worker threads; `None` uses the current rayon pool (the global one: all cores).
     pub threads: Option<usize>,
+    /// Time the traversals for [`RenderStats::timing`] (one ray in 16; off by default).
+    pub time_traces: bool,
 }
 
 impl Default for RenderSettings {
@@ -49,6 +51,7 @@ impl Default for RenderSettings {
             seed: 0,
             strategy: Strategy::default(),
             threads: None,
+            time_traces: false,
         }
     }
 }
@@ -78,6 +81,8 @@ pub struct RenderStats {
     pub samples: u64,
     /// Samples dropped because their radiance was NaN or infinite.
     pub nonfinite: u64,
+    /// Wall time summed over the tiles, i.e. over the worker threads (≈ `elapsed` × threads).
+    pub thread_time: Duration,
 }
 
 impl RenderStats {
@@ -93,6 +98,32 @@ impl RenderStats {
 
     /// What a render of `scene` with `settings` (its spp the spp reached) did, in three lines:
     /// the scene and its BVH, the speed, the rays by kind.
+    /// Where the time went: loading (`load`, with the BVH build inside it) and, of the render's
+    /// thread time, the share in BVH traversal and the rest (camera, sampler, surface and
+    /// shading, light sampling, film), with the traversal's own ray rate per thread. The split
+    /// needs [`RenderSettings::time_traces`]; without it only the totals are given.
+    pub fn timing(&self, load: Duration, build: Duration) -> String {
+        let thread = self.thread_time.as_secs_f64().max(1e-9);
+        let mut s = format!(
+            "time: scene load {:.1} ms (BVH build {:.1} ms), render {:.3} s = {:.3} thread-seconds",
+            load.as_secs_f64() * 1e3,
+            build.as_secs_f64() * 1e3,
+            self.elapsed.as_secs_f64(),
+            thread
+        );
+        if self.rays.timed > 0 {
+            let trace = self.rays.trace_seconds();
+            s += &format!(
+                ": trace {:.1}% ({:.2} Mrays/s per thread while tracing), shade and sample {:.1}%",
+                100.0 * trace / thread,
+                self.rays.total() as f64 / trace / 1e6,
+                100.0 * (1.0 - trace / thread)
+            );
+        }
+        s.push('\n');
+        s
+    }
+
     pub fn summary(&self, scene: &Scene, settings: &RenderSettings) -> String {
         format!(
             "{}: {} triangles, BVH built in {:.1} ms ({:.1} KiB)\n\
@@ -245,6 +276,7 @@ pub fn render_passes(
             stats.rays.add(&s.rays);
             stats.samples += s.samples;
             stats.nonfinite += s.nonfinite;
+            stats.thread_time += s.thread_time;
             done += n;
             if plan.time_limit.is_some_and(|t| start.elapsed() >= t) {
                 break;
@@ -263,6 +295,7 @@ struct TileResult {
     rays: RayCounts,
     samples: u64,
     nonfinite: u64,
+    time: Duration,
 }
 
 fn render_with<S: Sampler>(
@@ -277,12 +310,14 @@ fn render_with<S: Sampler>(
         max_depth: settings.max_depth,
         directions: settings.strategy.directions,
         lights: settings.strategy.lights,
+        time_traces: settings.time_traces,
     };
     let tiles_x = settings.width.div_ceil(TILE);
     let tiles_y = settings.height.div_ceil(TILE);
     let tiles: Vec<TileResult> = (0..tiles_x * tiles_y)
         .into_par_iter()
         .map_with(sampler, |sampler, t| {
+            let tile_start = Instant::now();
             let origin = UVec2::new((t % tiles_x) * TILE, (t / tiles_x) * TILE);
             let size = UVec2::new(
                 TILE.min(settings.width - origin.x),
@@ -295,6 +330,7 @@ fn render_with<S: Sampler>(
                 rays: RayCounts::default(),
                 samples: 0,
                 nonfinite: 0,
+                time: Duration::ZERO,
             };
             for y in origin.y..origin.y + size.y {
                 for x in origin.x..origin.x + size.x {
@@ -318,6 +354,7 @@ fn render_with<S: Sampler>(
                 }
             }
             progress.advance((size.x * size.y) as u64);
+            tile.time = tile_start.elapsed();
             tile
         })
         .collect();
@@ -335,6 +372,7 @@ fn render_with<S: Sampler>(
         stats.rays.add(&tile.rays);
         stats.samples += tile.samples;
         stats.nonfinite += tile.nonfinite;
+        stats.thread_time += tile.time;
     }
     stats.elapsed = start.elapsed();
     (film, stats)

@@ -345,3 +345,67 @@ fn images_whose_metadata_lies_about_their_size_are_refused() {
     );
     assert!(!m.exists());
 }
+
+/// `--stats` reports where the time went (load, BVH build, the traced share of the thread
+/// time, each a number in range) and leaves the image bit-identical: timing draws no random
+/// numbers and changes no decision.
+#[test]
+fn stats_report_the_time_split_and_change_no_pixel() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = common::cornell_path().join("cornell-box.obj");
+    let render = |name: &str, extra: &[&str]| {
+        let exr = dir.path().join(name);
+        let mut args = vec![
+            "render",
+            scene.to_str().unwrap(),
+            "-o",
+            exr.to_str().unwrap(),
+            "--width",
+            "32",
+            "--height",
+            "32",
+            "--spp",
+            "16",
+        ];
+        args.extend_from_slice(extra);
+        let out = vrpt(&args);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        (exr, String::from_utf8_lossy(&out.stderr).into_owned())
+    };
+    let (a, plain) = render("plain.exr", &[]);
+    let (b, timed) = render("timed.exr", &["--stats"]);
+    assert!(!plain.contains("time:"), "{plain}");
+    let line = timed
+        .lines()
+        .find(|l| l.starts_with("time: scene load"))
+        .unwrap_or_else(|| panic!("no time line: {timed}"));
+    let percent = |key: &str| -> f64 {
+        let rest = &line[line.find(key).unwrap_or_else(|| panic!("{key}: {line}")) + key.len()..];
+        rest.split('%').next().unwrap().trim().parse().unwrap()
+    };
+    let (trace, shade) = (percent("trace "), percent("shade and sample "));
+    assert!(trace > 0.0 && trace < 100.0, "{line}");
+    assert!((trace + shade - 100.0).abs() < 0.15, "{line}");
+    assert!(
+        line.contains("BVH build") && line.contains("thread-seconds"),
+        "{line}"
+    );
+    let read = |p: &Path| {
+        exr::prelude::read_first_rgba_layer_from_file(
+            p,
+            |r, _| vec![[0f32; 3]; r.width() * r.height()],
+            |v: &mut Vec<[f32; 3]>, p, (r, g, b, _a): (f32, f32, f32, f32)| {
+                v[p.y() * 32 + p.x()] = [r, g, b]
+            },
+        )
+        .unwrap()
+        .layer_data
+        .channel_data
+        .pixels
+    };
+    assert!(read(&a) == read(&b), "--stats changed the image");
+}

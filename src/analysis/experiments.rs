@@ -287,6 +287,7 @@ fn run_settings(st: &Strategy, s: &ExperimentSettings, spp: u32, k: u32) -> Rend
         seed: s.seed + k as u64,
         strategy: *st,
         threads: None,
+        time_traces: false,
     }
 }
 
