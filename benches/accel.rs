@@ -2,14 +2,22 @@
 //! incoherent bounce-like rays) on generated terrains of 10³…10⁶ triangles, against a
 //! brute-force loop over all triangles at small sizes. Throughput is reported in elements/s =
 //! rays/s.
+//!
+//! `trace_cornell` traces the rays of real paths in the shipped Cornell box (camera rays, their
+//! diffuse bounces and the shadow rays toward light samples, recorded once): the bare traversal
+//! rate to hold against the ray rate inside a render (`vrpt render --stats` prints both the
+//! render's rate and its rate while tracing).
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
-use glam::Vec3;
+use glam::{UVec2, Vec2, Vec3};
 use std::hint::black_box;
 use std::time::Duration;
 use vrpt::accel::Accel;
 use vrpt::math::{hash_words, u64_to_unit_f32};
-use vrpt::sampling::sample_uniform_hemisphere;
+use vrpt::camera::Camera;
+use vrpt::math::Frame;
+use vrpt::sampling::{sample_cosine_hemisphere, sample_uniform_hemisphere};
+use vrpt::scene::Scene;
 use vrpt::scene::generate::{terrain, terrain_side_for};
 
 const SIZES: [usize; 4] = [1_000, 10_000, 100_000, 1_000_000];
@@ -109,5 +117,76 @@ fn trace(c: &mut Criterion) {
     }
 }
 
-criterion_group!(benches, build, trace);
+/// Rays of real paths in the shipped Cornell box, by kind: closest-hit rays (camera and
+/// bounces) and shadow rays `(origin, direction, tmax)`. One path per pixel of the scene's
+/// 256×256 camera, up to 4 bounces with cosine-distributed directions about the side the ray
+/// came from, and a shadow ray toward a light sample at every vertex, as the renderer makes them.
+#[allow(clippy::type_complexity)]
+fn cornell_rays() -> (Scene, Vec<(Vec3, Vec3)>, Vec<(Vec3, Vec3, f32)>) {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/cornell-box");
+    let scene = vrpt::scene::load(std::path::Path::new(path)).expect("the shipped Cornell box");
+    let camera = Camera::new(&scene.camera, 256, 256).expect("its camera");
+    let (mut closest, mut shadow) = (Vec::new(), Vec::new());
+    for i in 0..256 * 256usize {
+        let (mut o, mut d) = camera.generate_ray(
+            UVec2::new((i % 256) as u32, (i / 256) as u32),
+            Vec2::new(u(i, 1), u(i, 2)),
+        );
+        for bounce in 0..5u64 {
+            closest.push((o, d));
+            let Some(hit) = scene.accel.intersect(o, d, f32::INFINITY) else {
+                break;
+            };
+            let s = scene.surface(&hit);
+            let n = if s.ng.dot(d) < 0.0 { s.ng } else { -s.ng };
+            let spawn = s.p + n * scene.ray_epsilon;
+            let k = 10 * bounce;
+            if let Some(ls) = scene
+                .lights
+                .sample(s.p, n, u(i, k + 3), Vec2::new(u(i, k + 4), u(i, k + 5)))
+            {
+                if ls.wi.dot(n) > 0.0 && ls.dist.is_finite() {
+                    shadow.push((spawn, ls.wi, ls.dist - 2.0 * scene.ray_epsilon));
+                }
+            }
+            if bounce == 4 {
+                break;
+            }
+            let local = sample_cosine_hemisphere(Vec2::new(u(i, k + 6), u(i, k + 7)));
+            (o, d) = (spawn, Frame::from_normal(n).to_world(local));
+        }
+    }
+    (scene, closest, shadow)
+}
+
+fn trace_cornell(c: &mut Criterion) {
+    let (scene, closest, shadow) = cornell_rays();
+    let mut g = c.benchmark_group("trace_cornell");
+    g.sample_size(20)
+        .warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(3));
+    g.throughput(Throughput::Elements(closest.len() as u64));
+    g.bench_function("closest", |b| {
+        b.iter(|| {
+            let mut hits = 0u32;
+            for &(o, d) in &closest {
+                hits += scene.accel.intersect(o, d, f32::INFINITY).is_some() as u32;
+            }
+            black_box(hits)
+        })
+    });
+    g.throughput(Throughput::Elements(shadow.len() as u64));
+    g.bench_function("shadow", |b| {
+        b.iter(|| {
+            let mut hits = 0u32;
+            for &(o, d, t) in &shadow {
+                hits += scene.accel.occluded(o, d, t) as u32;
+            }
+            black_box(hits)
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(benches, build, trace, trace_cornell);
 criterion_main!(benches);
