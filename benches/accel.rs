@@ -13,12 +13,12 @@ use glam::{UVec2, Vec2, Vec3};
 use std::hint::black_box;
 use std::time::Duration;
 use vrpt::accel::Accel;
-use vrpt::math::{hash_words, u64_to_unit_f32};
 use vrpt::camera::Camera;
 use vrpt::math::Frame;
+use vrpt::math::{hash_words, u64_to_unit_f32};
 use vrpt::sampling::{sample_cosine_hemisphere, sample_uniform_hemisphere};
-use vrpt::scene::Scene;
 use vrpt::scene::generate::{terrain, terrain_side_for};
+use vrpt::scene::Scene;
 
 const SIZES: [usize; 4] = [1_000, 10_000, 100_000, 1_000_000];
 const RAYS: usize = 1 << 14;
@@ -141,9 +141,10 @@ fn cornell_rays() -> (Scene, Vec<(Vec3, Vec3)>, Vec<(Vec3, Vec3, f32)>) {
             let n = if s.ng.dot(d) < 0.0 { s.ng } else { -s.ng };
             let spawn = s.p + n * scene.ray_epsilon;
             let k = 10 * bounce;
-            if let Some(ls) = scene
-                .lights
-                .sample(s.p, n, u(i, k + 3), Vec2::new(u(i, k + 4), u(i, k + 5)))
+            if let Some(ls) =
+                scene
+                    .lights
+                    .sample(s.p, n, u(i, k + 3), Vec2::new(u(i, k + 4), u(i, k + 5)))
             {
                 if ls.wi.dot(n) > 0.0 && ls.dist.is_finite() {
                     shadow.push((spawn, ls.wi, ls.dist - 2.0 * scene.ray_epsilon));

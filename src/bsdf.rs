@@ -91,6 +91,13 @@ impl Bsdf {
     }
 
     /// True when the BSDF reflects nothing (paths end on it).
+    /// True when sampling with `directions` reads the lobe-choice number: Phong directions
+    /// with both a diffuse and a specular part.
+    #[inline]
+    pub fn chooses_lobe(&self, directions: Directions) -> bool {
+        directions == Directions::Phong && self.p_diffuse > 0.0 && self.p_diffuse < 1.0
+    }
+
     #[inline]
     pub fn is_black(&self) -> bool {
         self.kd.max_element() <= 0.0 && self.ks.max_element() <= 0.0

@@ -206,11 +206,17 @@ pub fn radiance<S: Sampler>(
         if segment == settings.max_depth {
             break;
         }
-        let u = BounceSample::draw(sampler, sample_lights);
         let bsdf = scene.bsdf_at(&s);
         if bsdf.is_black() {
             break;
         }
+        // values this bounce cannot use are skipped, not drawn (the same image, fewer hashes)
+        let u = BounceSample::draw_needed(
+            sampler,
+            sample_lights,
+            bsdf.chooses_lobe(settings.directions),
+            segment >= RR_START_BOUNCE,
+        );
         // Two-sided shading: put both normals on the side the ray came from.
         let (ng, mut ns) = if front { (s.ng, s.ns) } else { (-s.ng, -s.ns) };
         if ns.dot(wo) <= 0.0 {

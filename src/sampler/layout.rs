@@ -70,15 +70,34 @@ impl BounceSample {
     /// dimensions are skipped, not drawn, and read as zero: the layout stays the same.
     #[inline(always)]
     pub fn draw<S: Sampler>(s: &mut S, lights: bool) -> Self {
+        Self::draw_needed(s, lights, true, true)
+    }
+
+    /// [`BounceSample::draw`] that also skips the lobe choice when `lobe` is false (a BSDF of
+    /// one lobe) and the roulette value when `roulette` is false (a bounce before roulette
+    /// starts). A skipped dimension reads as zero and every other value is the one `draw` gives:
+    /// each sampler's value depends on the dimension's index only, and skipping keeps the index.
+    #[inline(always)]
+    pub fn draw_needed<S: Sampler>(s: &mut S, lights: bool, lobe: bool, roulette: bool) -> Self {
         let (light, light_point) = if lights {
             (s.next_1d(), s.next_2d())
         } else {
             s.skip(2);
             (0.0, Vec2::ZERO)
         };
-        let lobe = s.next_1d();
+        let lobe = if lobe {
+            s.next_1d()
+        } else {
+            s.skip(1);
+            0.0
+        };
         let direction = s.next_2d();
-        let roulette = s.next_1d();
+        let roulette = if roulette {
+            s.next_1d()
+        } else {
+            s.skip(1);
+            0.0
+        };
         BounceSample {
             light,
             light_point,
@@ -132,6 +151,22 @@ mod tests {
             assert_eq!((skipped.light, skipped.light_point), (0.0, Vec2::ZERO));
             assert_eq!((skipped.lobe, skipped.direction), (bo.lobe, bo.direction));
             assert_eq!(skipped.roulette, bo.roulette);
+            // skipping the lobe and roulette values leaves the others as draw gives them
+            let mut d = a.clone();
+            d.start_pixel_sample(UVec2::new(1, 2), i);
+            CameraSample::draw(&mut d);
+            let lean = BounceSample::draw_needed(&mut d, true, false, false);
+            assert_eq!((lean.lobe, lean.roulette), (0.0, 0.0));
+            assert_eq!((lean.light, lean.light_point), (bo.light, bo.light_point));
+            assert_eq!(lean.direction, bo.direction);
+            // and the next bounce starts where it would have
+            assert_eq!(d.next_1d(), {
+                let mut e = a.clone();
+                e.start_pixel_sample(UVec2::new(1, 2), i);
+                CameraSample::draw(&mut e);
+                BounceSample::draw(&mut e, true);
+                e.next_1d()
+            });
         }
     }
 }
