@@ -166,7 +166,7 @@ fn estimator_variance<S: Sampler>(
 /// Fitted slopes of log(variance) against log(N) for N = 4, 16, …, 4096 (square strata). With
 /// R = 256 replicates a variance estimate has relative standard deviation √(2/R) ≈ 0.09, so the
 /// slope from these 6 points has standard deviation ≈ 0.09/√(Σ(ln Nᵢ − mean)²) = 0.09/5.8 ≈
-/// 0.015; the bounds below are ≥ 6 of those from the theoretical slopes (−1, −2, −1.5).
+/// 0.015; the bounds below are ≥ 6 of those from the theoretical slopes (−1, −2 to −3, −1.5).
 #[test]
 fn variance_slopes_match_theory() {
     let ns = [4u32, 16, 64, 256, 1024, 4096];
@@ -214,8 +214,12 @@ fn variance_slopes_match_theory() {
     assert!((ind_edge + 1.0).abs() < 0.1, "{report}");
     assert!(str_smooth <= -1.8, "{report}");
     assert!(str_edge <= -1.35, "{report}");
-    // and not faster than theory allows (a broken test that returns the truth would be −∞)
-    assert!(str_smooth >= -2.2 && str_edge >= -1.7, "{report}");
+    // and not faster than theory allows (a broken test that returns the truth would be −∞):
+    // the multi-jittered points stratify each coordinate alone into N intervals, so the additive
+    // part of a smooth integrand (exp(x+y) has a large one) falls as N⁻³ (1D stratification of a
+    // smooth function) while the rest falls as N⁻²: over N = 4…4096 the fitted slope lies
+    // between −3 and −2 (measured −2.20), and the edge's between −2 and −1.5 (measured −1.45)
+    assert!(str_smooth >= -3.1 && str_edge >= -1.7, "{report}");
 }
 
 /// Per-sample variance of `g(ω) = (n+2)/(2π) cosⁿα · cosθ` (the Phong specular term times the

@@ -6,7 +6,19 @@
 //! `π_d(j)`, where `π_d` is Kensler's hashed permutation of `0..N` keyed by (seed, pixel, pass,
 //! dimension) — a different order per dimension, so dimensions are not correlated — and is
 //! jittered uniformly inside it (the permutation key also holds N, so sets of different sizes
-//! never share strata orders). Each pass of N samples (sample indices `pN .. (p+1)N`) is a
+//! never share strata orders).
+//!
+//! 2D points are Kensler's correlated multi-jittered pattern: besides its a×b cell `(sx, sy)`,
+//! a point sits in one of the b sub-columns of its column and one of the a sub-rows of its row,
+//! `x = (sx·b + σ(sy) + ξ₁)/N`, `y = (sy·a + τ(sx) + ξ₂)/N`, with σ, τ permutations keyed by
+//! the dimension only. The N samples keep one per cell, and each coordinate alone is stratified
+//! into N intervals (a Latin hypercube): what an axis-aligned edge in a pixel, a shadow of an
+//! axis-aligned box or a rectangular light integrates. With jitter inside cells only, a
+//! coordinate was stratified into a intervals (8 at 64 spp, against 64 now); on Mitsuba's
+//! Cornell box at 64 spp the change lowered vrpt's MSE from 2.08e-4 to 1.24e-4 (median of 5 seeds; Mitsuba's
+//! own multijitter sampler: 1.15e-4).
+//!
+//! Each pass of N samples (sample indices `pN .. (p+1)N`) is a
 //! complete, independent stratified set, so runs of several passes stay unbiased and
 //! stratified pass by pass.
 
@@ -130,11 +142,15 @@ pub struct StratifiedSampler {
     seed: u64,
     n: u32,
     grid: (u32, u32),
-    /// Division by N and by the grid width, the permutation mask, and 1/N, 1/a, 1/b.
+    /// Division by N, by the grid width a and height b, the permutation masks of N, a and b,
+    /// and 1/N.
     div_n: FastDiv,
     div_a: FastDiv,
+    div_b: FastDiv,
     mask: u32,
-    inv: (f32, f32, f32),
+    mask_a: u32,
+    mask_b: u32,
+    inv: f32,
     /// Key of the current (pixel, pass, N).
     key: u64,
     /// Index of the current sample within its pass.
@@ -153,17 +169,20 @@ impl StratifiedSampler {
             grid: (a, b),
             div_n: FastDiv::new(n),
             div_a: FastDiv::new(a),
+            div_b: FastDiv::new(b),
             mask: mask_of(n),
-            inv: (1.0 / n as f32, 1.0 / a as f32, 1.0 / b as f32),
+            mask_a: mask_of(a),
+            mask_b: mask_of(b),
+            inv: 1.0 / n as f32,
             key: 0,
             j: 0,
             dim: 0,
         }
     }
 
-    /// (stratum of the current sample, jitter hash) in the next dimension.
+    /// (stratum of the current sample, jitter hash, dimension key) in the next dimension.
     #[inline(always)]
-    fn next_stratum(&mut self) -> (u32, u64) {
+    fn next_stratum(&mut self) -> (u32, u64, u64) {
         let dk = mix64(self.key ^ self.dim.wrapping_mul(0xd6e8_feb8_6659_fd93));
         self.dim += 1;
         let jitter = mix64(dk ^ (self.j as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15));
@@ -172,7 +191,7 @@ impl StratifiedSampler {
         } else {
             0
         };
-        (s, jitter)
+        (s, jitter, dk)
     }
 }
 
@@ -196,18 +215,34 @@ impl Sampler for StratifiedSampler {
 
     #[inline(always)]
     fn next_1d(&mut self) -> f32 {
-        let (s, h) = self.next_stratum();
-        (jitter_in(s, u64_to_unit_f32(h)) * self.inv.0).min(ONE_MINUS_EPSILON)
+        let (s, h, _) = self.next_stratum();
+        (jitter_in(s, u64_to_unit_f32(h)) * self.inv).min(ONE_MINUS_EPSILON)
     }
 
     #[inline(always)]
     fn next_2d(&mut self) -> Vec2 {
-        let (s, h) = self.next_stratum();
+        let (s, h, dk) = self.next_stratum();
+        let (a, b) = self.grid;
         let sy = self.div_a.div(s);
-        let sx = s - sy * self.grid.0;
+        let sx = s - sy * a;
+        // the sub-column (of b): a permutation of the row index, its own for each column, so a
+        // column holds every sub-column once; the sub-row (of a) likewise, its own for each row
+        let key = (dk >> 32) as u32;
+        let px = if b > 1 {
+            let k = key ^ sx.wrapping_mul(0x9e37_79b9);
+            permute_with(sy, &self.div_b, self.mask_b, k)
+        } else {
+            0
+        };
+        let py = if a > 1 {
+            let k = key ^ 0x68bc_21eb ^ sy.wrapping_mul(0x85eb_ca6b);
+            permute_with(sx, &self.div_a, self.mask_a, k)
+        } else {
+            0
+        };
         Vec2::new(
-            (jitter_in(sx, u64_to_unit_f32(h)) * self.inv.1).min(ONE_MINUS_EPSILON),
-            (jitter_in(sy, u64_to_unit_f32(h << 24)) * self.inv.2).min(ONE_MINUS_EPSILON),
+            (jitter_in(sx * b + px, u64_to_unit_f32(h)) * self.inv).min(ONE_MINUS_EPSILON),
+            (jitter_in(sy * a + py, u64_to_unit_f32(h << 24)) * self.inv).min(ONE_MINUS_EPSILON),
         )
     }
 }
@@ -244,6 +279,42 @@ mod tests {
             ] {
                 assert_eq!(f.div(a), a / d, "{a}/{d}");
                 assert_eq!(f.rem(a), a % d, "{a}%{d}");
+            }
+        }
+    }
+
+    /// The N points of a 2D dimension: one per a×b cell, and each coordinate alone one per
+    /// interval of width 1/N (correlated multi-jitter), for square, oblong and prime N, in
+    /// several dimensions, pixels and passes.
+    #[test]
+    fn points_2d_fill_cells_and_both_projections() {
+        for n in [1u32, 7, 8, 12, 16, 64, 100] {
+            let (a, b) = grid_shape(n);
+            let mut sampler = StratifiedSampler::new(5, n);
+            for (pixel, pass) in [(UVec2::new(0, 0), 0u32), (UVec2::new(3, 9), 2)] {
+                for dim in 0..4 {
+                    let (mut cells, mut xs, mut ys) = (
+                        vec![0; n as usize],
+                        vec![0; n as usize],
+                        vec![0; n as usize],
+                    );
+                    for j in 0..n {
+                        sampler.start_pixel_sample(pixel, pass * n + j);
+                        sampler.skip(dim);
+                        let p = sampler.next_2d();
+                        assert!((0.0..1.0).contains(&p.x) && (0.0..1.0).contains(&p.y));
+                        let (cx, cy) = ((p.x * a as f32) as u32, (p.y * b as f32) as u32);
+                        cells[(cy * a + cx) as usize] += 1;
+                        xs[(p.x * n as f32) as usize] += 1;
+                        ys[(p.y * n as f32) as usize] += 1;
+                    }
+                    for (what, v) in [("cell", &cells), ("x interval", &xs), ("y interval", &ys)] {
+                        assert!(
+                            v.iter().all(|&c| c == 1),
+                            "n={n} dim={dim}: a {what} holds {v:?}"
+                        );
+                    }
+                }
             }
         }
     }
