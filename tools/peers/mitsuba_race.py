@@ -23,7 +23,8 @@ What it does, in order (every step prints what it found):
            warm-up render of the same configuration.
 4. race    MSE at equal time: each contestant gets spp chosen from its measured rate so that a
            render takes the budget ``--budget`` seconds (default: Mitsuba's independent sampler
-           at ``--spp``), ``--runs`` runs with other seeds. The MSE is against the mean of the
+           at ``--spp``), rounded as each sampler wants it (a square for vrpt's stratified, a
+           power of two for Sobol and Mitsuba's ldsampler, p^2 for orthogonal), ``--runs`` runs with other seeds. The MSE is against the mean of the
            two references (whose own noise is printed next to it), and is reported scaled to the
            budget, MSE * t / budget, so a render that ran 3% long is not favoured; median and
            min..max over the runs.
@@ -212,8 +213,20 @@ class Vrpt:
     def __init__(self, exe, scene_dir, work):
         self.exe, self.scene_dir, self.work = exe, scene_dir, work
 
+    @staticmethod
+    def spp_for(strategy, spp):
+        """The spp a user would pick near `spp`: a square for the stratified sampler (its 2D
+        strata form a k x k grid; 34 spp would make 2 x 17 slabs), a power of two for Sobol."""
+        sampler = "stratified" if "+" not in strategy else strategy.split("+")[0]
+        if sampler == "stratified":
+            return max(1, int(round(math.sqrt(spp)))) ** 2
+        if sampler == "sobol":
+            return 1 << max(0, int(round(math.log2(max(spp, 1)))))
+        return max(1, spp)
+
     def render(self, strategy, spp, seed, threads=None):
         """(image HxWx3 float64, render seconds recorded by vrpt, spp)."""
+        spp = self.spp_for(strategy, spp)
         out = os.path.join(self.work, f"vrpt-{strategy.replace('+', '_')}.exr")
         axes = strategy.split("+")
         flags = (["--strategy", strategy] if len(axes) == 1 else
@@ -326,6 +339,7 @@ def main():
               "falling back to scalar_rgb (for llvm_ad_rgb: apt install libllvm19)")
         variant = "scalar_rgb"
         mi.set_variant(variant)
+    mi.set_log_level(mi.LogLevel.Error)  # not the sampler's "sample count rounded" notes
     mitsuba = Mitsuba(variant, a.size, a.size, a.max_depth)
     vrpt = Vrpt(a.vrpt, scene_dir, a.out)
     pixels = a.size * a.size
