@@ -151,6 +151,17 @@ fn bad_input_gives_one_line_and_nonzero_exit() {
         "spp 0",
         "--spp",
     );
+    if cfg!(target_os = "linux") {
+        // 65536² pixels need ~640 GiB: refused before any buffer is allocated (an allocation
+        // failure would abort with no error line)
+        assert_one_line_error(
+            &vrpt(&[
+                "render", cb, "-o", o, "--width", "65536", "--height", "65536",
+            ]),
+            "65536x65536",
+            "needs about",
+        );
+    }
     assert_one_line_error(
         &vrpt(&["render", cb, "-o", o, "--sampler", "halton"]),
         "sampler",
