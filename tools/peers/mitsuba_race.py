@@ -369,21 +369,23 @@ def main():
     print(f"race reference: the mean of both; its own noise (MSE vs truth) ~ {ref_noise:.3g}")
 
     # ---- 3. samples/s at equal spp
-    print(f"\n== samples/s at {a.spp} spp, {a.runs} runs (median, min..max)")
+    print(f"\n== samples/s and MSE at {a.spp} spp, {a.runs} runs (median, min..max)")
     speed = {}
     contestants = [(f"Mitsuba {variant} {s}", "mitsuba", s) for s in MITSUBA_SAMPLERS]
     contestants += [(label, "vrpt", s) for label, s in VRPT_STRATEGIES]
     for label, who, s in contestants:
-        rates = []
+        rates, errs = [], []
         for r in range(a.runs):
             if who == "mitsuba":
-                _, t, n = mitsuba.render(s, a.spp, 100 + r)
+                img, t, n = mitsuba.render(s, a.spp, 100 + r)
             else:
-                _, t, n = vrpt.render(s, a.spp, 100 + r)
+                img, t, n = vrpt.render(s, a.spp, 100 + r)
             rates.append(pixels * n / t / 1e6)
-        speed[label] = {"spp": n, "msamples_per_s": summary(rates)}
+            errs.append(mse(img, ref))
+        speed[label] = {"spp": n, "msamples_per_s": summary(rates), "mse": summary(errs)}
         med, lo, hi = summary(rates)
-        print(f"  {label:42s} {n:5d} spp  {med:6.2f} M samples/s  ({lo:.2f}..{hi:.2f})", flush=True)
+        print(f"  {label:42s} {n:5d} spp  {med:6.2f} M samples/s  ({lo:.2f}..{hi:.2f})  "
+              f"MSE {speed[label]['mse'][0]:.3g}", flush=True)
 
     # ---- 4. MSE at equal time
     base = f"Mitsuba {variant} independent"
@@ -411,12 +413,13 @@ def main():
     best_m = min((l for l, w, _ in contestants if w == "mitsuba" and l != base),
                  key=lambda l: race[l]["mse"][0])
     ours = VRPT_STRATEGIES[0][0]
-    print("\n| renderer | spp | M samples/s at equal spp | MSE at equal time | vs Mitsuba independent |")
-    print("|---|---:|---:|---:|---:|")
+    print("\n| renderer | spp | M samples/s at equal spp | MSE at equal spp | "
+          "MSE at equal time | vs Mitsuba independent |")
+    print("|---|---:|---:|---:|---:|---:|")
     for label, _, _ in contestants:
         m = race[label]["mse"][0]
         print(f"| {label} | {speed[label]['spp']} | {speed[label]['msamples_per_s'][0]:.2f} | "
-              f"{m:.3g} | {m / race[base]['mse'][0]:.2f}x |")
+              f"{speed[label]['mse'][0]:.3g} | {m:.3g} | {m / race[base]['mse'][0]:.2f}x |")
     print(f"\nvrpt mis / Mitsuba independent: samples/s "
           f"{speed[ours]['msamples_per_s'][0] / speed[base]['msamples_per_s'][0]:.2f}x, "
           f"equal-time MSE {race[ours]['mse'][0] / race[base]['mse'][0]:.2f}x; "
