@@ -5,6 +5,7 @@
 use clap::{Args, Parser, Subcommand};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
+use std::process::ExitCode;
 use std::time::{Duration, Instant};
 use vrpt::analysis::experiments::{
     compare, converge, write_csv, ExperimentProgress, ExperimentSettings, Silent,
@@ -16,7 +17,7 @@ use vrpt::bsdf::Directions;
 use vrpt::error::{Error, Result};
 use vrpt::image_io::{check_image_path, check_writable, read_exr, write_bytes, write_exr, Format};
 use vrpt::lights::LightStrategy;
-use vrpt::output::{write_render, RenderMetadata};
+use vrpt::output::{parse_shard, write_render, RenderMetadata};
 use vrpt::render::{render_passes, NoProgress, PassPlan, Progress, RenderSettings};
 use vrpt::sampler::SamplerKind;
 use vrpt::scene::{self, Scene};
@@ -146,6 +147,12 @@ pub struct RenderArgs {
     /// pass, or 16 with --time-limit).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     pub pass_spp: Option<u32>,
+    /// Render only shard I of N (I from 0): the samples ⌊I·spp/N⌋ .. ⌊(I+1)·spp/N⌋ of the image,
+    /// same seed, same passes. `vrpt merge` of all N shards equals one render of all the
+    /// samples; each shard alone is an unbiased estimate. For job arrays on clusters
+    /// (examples/slurm, examples/kubernetes).
+    #[arg(long, value_name = "I/N", value_parser = parse_shard, conflicts_with_all = ["time_limit", "first_sample"])]
+    pub shard: Option<(u32, u32)>,
     /// Worker threads (default: all cores). The image does not depend on it.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1024))]
     pub threads: Option<u32>,
@@ -324,14 +331,16 @@ pub struct ConvergeArgs {
     pub plot: Vec<PathBuf>,
 }
 
-/// Run a parsed command line.
-pub fn run(cli: Cli) -> Result<()> {
+/// Run a parsed command line; the exit code of a command that ran (130: a render was
+/// interrupted and wrote the samples taken).
+pub fn run(cli: Cli) -> Result<ExitCode> {
+    let ok = |r: Result<()>| r.map(|()| ExitCode::SUCCESS);
     match cli.command {
         Command::Render(args) => run_render(&args),
-        Command::Merge(args) => run_merge(&args),
-        Command::Diff(args) => run_diff(&args),
-        Command::Compare(args) => run_compare(&args),
-        Command::Converge(args) => run_converge(&args),
+        Command::Merge(args) => ok(run_merge(&args)),
+        Command::Diff(args) => ok(run_diff(&args)),
+        Command::Compare(args) => ok(run_compare(&args)),
+        Command::Converge(args) => ok(run_converge(&args)),
     }
 }
 
@@ -410,7 +419,8 @@ fn default_output(scene_path: &Path) -> PathBuf {
     PathBuf::from(format!("{stem}.png"))
 }
 
-fn run_render(args: &RenderArgs) -> Result<()> {
+fn run_render(args: &RenderArgs) -> Result<ExitCode> {
+    crate::GRACEFUL.store(true, std::sync::atomic::Ordering::SeqCst);
     let output = args
         .output
         .clone()
@@ -436,24 +446,35 @@ fn run_render(args: &RenderArgs) -> Result<()> {
             .pass_spp
             .or(args.time_limit.map(|_| 16.min(settings.spp))),
         time_limit: args.time_limit.map(Duration::from_secs_f64),
+        shard: args.shard,
+        stop: Some(&crate::STOP),
     };
-    let passes = settings.spp.div_ceil(plan.pass_spp.unwrap_or(settings.spp)) as u64;
+    let range = match args.shard {
+        Some(s) => vrpt::render::shard_range(settings.spp, s)?,
+        None => 0..settings.spp,
+    };
     let pixels = settings.width as u64 * settings.height as u64;
     let bar = Bar::new(
         args.quiet,
-        pixels * passes,
+        pixels * range.len() as u64,
         "{spinner} [{elapsed_precise}] {bar:40} {percent}% ETA {eta}",
     );
     let progress: &dyn Progress = bar.as_ref().map_or(&NoProgress, |b| b);
-    let (film, stats, reached) = render_passes(&scene, &settings, &plan, progress)?;
+    let r = render_passes(&scene, &settings, &plan, progress)?;
     drop(bar);
+    let (film, stats) = (r.film, r.stats);
+    let requested = range.len() as u32;
     let settings = RenderSettings {
-        spp: reached,
+        spp: r.spp,
+        first_sample: r.first_sample,
         ..settings
     };
     let meta = RenderMetadata {
         pass_spp: plan.pass_spp,
         time_limit_seconds: args.time_limit,
+        shard: args.shard,
+        requested_spp: (r.spp < requested).then_some(requested as u64),
+        interrupted: r.interrupted,
         ..RenderMetadata::new(&scene, &settings, &stats)
     };
     write_render(
@@ -463,6 +484,7 @@ fn run_render(args: &RenderArgs) -> Result<()> {
         args.exposure,
         args.variance.as_deref(),
     )?;
+
     if stats.nonfinite > 0 {
         warn(&format!(
             "{} non-finite radiance samples were dropped (not written into the image)",
@@ -476,7 +498,15 @@ fn run_render(args: &RenderArgs) -> Result<()> {
         }
         eprintln!("wrote {}", output.display());
     }
-    Ok(())
+    if r.interrupted {
+        warn(&format!(
+            "interrupted: wrote {} with the {} of {requested} spp taken (its metadata says so)",
+            output.display(),
+            r.spp
+        ));
+        return Ok(ExitCode::from(130));
+    }
+    Ok(ExitCode::SUCCESS)
 }
 
 fn run_merge(args: &MergeArgs) -> Result<()> {
@@ -509,11 +539,29 @@ fn run_merge(args: &MergeArgs) -> Result<()> {
     Ok(())
 }
 
+/// The largest `|a − b| / max(|a|, |b|)` over pixels and channels (0 where both are 0): how
+/// far two images are from equal, e.g. a merge of shards and the render of all their samples
+/// (which agree to f32 rounding, a few 1e-7).
+fn max_relative_difference(a: &[glam::Vec3], b: &[glam::Vec3]) -> f32 {
+    a.iter()
+        .zip(b)
+        .flat_map(|(x, y)| (0..3).map(move |c| (x[c], y[c])))
+        .map(|(x, y)| {
+            let m = x.abs().max(y.abs());
+            if m > 0.0 {
+                (x - y).abs() / m
+            } else {
+                0.0
+            }
+        })
+        .fold(0.0, f32::max)
+}
+
 fn run_diff(args: &DiffArgs) -> Result<()> {
     let a = read_exr(&args.image)?;
     let r = read_exr(&args.reference)?;
-    RenderMetadata::from_image(&a, &args.image)?;
-    RenderMetadata::from_image(&r, &args.reference)?;
+    RenderMetadata::radiance(&a, &args.image)?;
+    RenderMetadata::radiance(&r, &args.reference)?;
     if (a.width, a.height) != (r.width, r.height) {
         return Err(Error::Settings(format!(
             "{} is {}×{} but {} is {}×{}",
@@ -535,6 +583,10 @@ fn run_diff(args: &DiffArgs) -> Result<()> {
     t += &format!("RMSE               {:.6e}\n", m.rmse);
     t += &format!("MAE                {:.6e}\n", m.mae);
     t += &format!("mean signed error  {:+.6e}\n", m.mean_signed_error);
+    t += &format!(
+        "max relative difference {:.3e}\n",
+        max_relative_difference(&a.pixels, &r.pixels)
+    );
     if let Some(v) = &a.variance {
         t += &format!("variance of mean   {:.6e}\n", mean_variance(v));
         let b = image_bias(&a.pixels, v, &r.pixels, r.variance.as_deref());

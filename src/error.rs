@@ -44,3 +44,23 @@ pub fn read_text(path: &std::path::Path) -> Result<String> {
         },
     })
 }
+
+/// At most the first 40 characters of `s`, with `…` where it was cut: what an error message
+/// quotes of a line or a value, so a 1 MB line does not come back as a 1 MB error.
+pub fn clip(s: &str) -> std::borrow::Cow<'_, str> {
+    const MAX: usize = 40;
+    match s.char_indices().nth(MAX) {
+        None => s.into(),
+        Some((i, _)) => format!("{}…", &s[..i]).into(),
+    }
+}
+
+/// An error line cut to at most 400 characters: the last guard of bounded messages (a path or
+/// a message from a dependency could quote more than [`clip`] allows).
+pub fn clip_line(s: &str) -> std::borrow::Cow<'_, str> {
+    const MAX: usize = 400;
+    match s.char_indices().nth(MAX) {
+        None => s.into(),
+        Some((i, _)) => format!("{}…", &s[..i]).into(),
+    }
+}

@@ -54,6 +54,20 @@ impl Film {
         self.count[i] += count;
     }
 
+    /// The sums and count of pixel `i`.
+    #[inline]
+    pub fn pixel_sums(&self, i: usize) -> (DVec3, DVec3, u64) {
+        (self.sum[i], self.sum_sq[i], self.count[i])
+    }
+
+    /// Replace the sums and count of pixel `i` (a render that went on from them).
+    #[inline]
+    pub fn set_pixel_sums(&mut self, i: usize, sum: DVec3, sum_sq: DVec3, count: u64) {
+        self.sum[i] = sum;
+        self.sum_sq[i] = sum_sq;
+        self.count[i] = count;
+    }
+
     /// Add one sample to pixel `i`.
     #[cfg(test)]
     fn add_sample(&mut self, i: usize, v: Vec3) {

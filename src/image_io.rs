@@ -87,6 +87,22 @@ fn temp_path(path: &Path) -> PathBuf {
     path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
 }
 
+/// Temporary files being written: a process that must end at once (a second Ctrl-C) removes
+/// them with [`remove_temp_files`] so it leaves nothing behind.
+static PENDING: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
+
+fn pending() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
+    PENDING.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// Remove the temporary files of writes still under way (before the process exits mid-write;
+/// the files they would replace are untouched).
+pub fn remove_temp_files() {
+    for p in pending().drain(..) {
+        let _ = std::fs::remove_file(p);
+    }
+}
+
 /// Write with `write` to a temporary file beside `path`, then rename it over `path`: an
 /// interrupted or failed write leaves any older file intact.
 pub fn write_atomically(
@@ -99,14 +115,16 @@ pub fn write_atomically(
     };
     check_writable(path)?;
     let tmp = temp_path(path);
-    if let Err(e) = write(&tmp) {
+    pending().push(tmp.clone());
+    let result = match write(&tmp) {
+        Err(e) => Err(err(e)),
+        Ok(()) => std::fs::rename(&tmp, path).map_err(|e| err(e.to_string())),
+    };
+    if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
-        return Err(err(e));
     }
-    std::fs::rename(&tmp, path).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        err(e.to_string())
-    })
+    pending().retain(|p| p != &tmp);
+    result
 }
 
 /// Write `pixels` (row-major, `width × height`) as a linear RGB f32 EXR with `metadata`
@@ -225,6 +243,39 @@ pub fn check_image_path(path: &Path) -> Result<Format> {
     Ok(f)
 }
 
+/// Refuse, from its header alone, an EXR whose declared size cannot be real or allocated: more
+/// pixels than [`MAX_PIXELS_PER_BYTE`] per byte of file (no EXR compression packs more: deflate
+/// stops at 1032:1, that is under 200 pixels per byte at 6 bytes per pixel) or more than the
+/// memory available.
+fn check_exr_size(path: &Path) -> Result<()> {
+    let err = |message: String| Error::ImageRead {
+        path: path.to_path_buf(),
+        message,
+    };
+    let bytes = std::fs::metadata(path)
+        .map_err(|e| err(e.to_string()))?
+        .len();
+    let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| err(e.to_string()))?;
+    for h in meta.headers.iter() {
+        let (w, hgt) = (h.layer_size.width() as u64, h.layer_size.height() as u64);
+        let pixels = w.saturating_mul(hgt);
+        if pixels > MAX_PIXELS_PER_BYTE.saturating_mul(bytes) {
+            return Err(err(format!(
+                "its header declares {w}x{hgt} pixels, more than a {bytes}-byte file can hold"
+            )));
+        }
+        crate::render::check_memory(
+            w.min(u32::MAX as u64) as u32,
+            hgt.min(u32::MAX as u64) as u32,
+        )
+        .map_err(|e| err(e.to_string()))?;
+    }
+    Ok(())
+}
+
+/// The most pixels an EXR may declare per byte of its file (see [`read_exr`]).
+pub const MAX_PIXELS_PER_BYTE: u64 = 1024;
+
 /// Read the first RGB layer of an EXR, its `variance.*` channels if any, and vrpt's metadata.
 pub fn read_exr(path: &Path) -> Result<RgbImage> {
     if !path.exists() {
@@ -232,6 +283,7 @@ pub fn read_exr(path: &Path) -> Result<RgbImage> {
             path: path.to_path_buf(),
         });
     }
+    check_exr_size(path)?;
     type Px = (f32, f32, f32, f32, f32, f32);
     type Pixels = (usize, Vec<Px>);
     let image = exr_prelude::read()
@@ -270,7 +322,32 @@ pub fn read_exr(path: &Path) -> Result<RgbImage> {
         }
     }
     let px = &image.layer_data.channel_data.pixels.1;
-    let has_variance = image.layer_data.channel_data.channels.3.is_some();
+    let ch = &image.layer_data.channel_data.channels;
+    let variance_channels = [ch.3.is_some(), ch.4.is_some(), ch.5.is_some()];
+    let has_variance = variance_channels == [true; 3];
+    let err = |message: String| Error::ImageRead {
+        path: path.to_path_buf(),
+        message,
+    };
+    if !has_variance && variance_channels.contains(&true) {
+        return Err(err(
+            "has some of the channels variance.R, variance.G, variance.B but not all".into(),
+        ));
+    }
+    let width = size.width().max(1);
+    for (i, p) in px.iter().enumerate() {
+        let rgb = [p.0, p.1, p.2];
+        let var = [p.3, p.4, p.5];
+        let (x, y) = (i % width, i / width);
+        if !rgb.iter().all(|c| c.is_finite()) {
+            return Err(err(format!("pixel ({x}, {y}) is not a finite colour")));
+        }
+        if has_variance && !var.iter().all(|v| v.is_finite() && *v >= 0.0) {
+            return Err(err(format!(
+                "the variance of pixel ({x}, {y}) is not a finite non-negative number"
+            )));
+        }
+    }
     Ok(RgbImage {
         width: size.width() as u32,
         height: size.height() as u32,

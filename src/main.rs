@@ -4,6 +4,29 @@ mod cli;
 
 use clap::Parser;
 use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+/// Set by the first SIGINT/SIGTERM during a render: the render stops after its current batch
+/// of samples and writes what it has.
+pub static STOP: AtomicBool = AtomicBool::new(false);
+/// Whether the command under way stops gracefully (a render); any other command, and a second
+/// signal, end the process at once.
+pub static GRACEFUL: AtomicBool = AtomicBool::new(false);
+
+/// First signal of a render: ask it to stop. Otherwise: remove the temporary files of writes
+/// under way (the outputs they would replace stay as they were) and exit with 130.
+fn on_signal() {
+    if GRACEFUL.load(Ordering::SeqCst) && !STOP.swap(true, Ordering::SeqCst) {
+        eprintln!(
+            "\ninterrupted: finishing the current batch of samples, then writing the image \
+             (interrupt again to abort without writing)"
+        );
+    } else {
+        vrpt::image_io::remove_temp_files();
+        eprintln!("\naborted");
+        std::process::exit(130);
+    }
+}
 
 fn main() -> ExitCode {
     let cli = match cli::Cli::try_parse() {
@@ -25,14 +48,18 @@ fn main() -> ExitCode {
             }
             // clap's message, first line only: "error: invalid value 'x' for '--spp <SPP>': ..."
             let text = e.render().to_string();
-            eprintln!("{}", text.lines().next().unwrap_or("error: bad arguments"));
+            let line = text.lines().next().unwrap_or("error: bad arguments");
+            eprintln!("{}", vrpt::error::clip_line(line));
             return ExitCode::from(2);
         }
     };
+    if let Err(e) = ctrlc::set_handler(on_signal) {
+        eprintln!("warning: cannot handle Ctrl-C: {e}");
+    }
     match cli::run(cli) {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(code) => code,
         Err(e) => {
-            eprintln!("error: {e}");
+            eprintln!("{}", vrpt::error::clip_line(&format!("error: {e}")));
             ExitCode::FAILURE
         }
     }

@@ -45,6 +45,12 @@ pub struct RenderMetadata {
     pub merged_from: Option<String>,
     /// What the pixels are, when not the radiance (e.g. "variance of the mean").
     pub image: Option<String>,
+    /// `(i, n)`: the render is shard `i` of `n` (`vrpt render --shard i/n`).
+    pub shard: Option<(u32, u32)>,
+    /// The spp asked for, when the render stopped before it (a time limit or a signal).
+    pub requested_spp: Option<u64>,
+    /// Whether a signal (Ctrl-C, SIGTERM) stopped the render: `spp` counts the samples taken.
+    pub interrupted: bool,
 }
 
 impl RenderMetadata {
@@ -66,6 +72,9 @@ impl RenderMetadata {
             time_limit_seconds: None,
             merged_from: None,
             image: None,
+            shard: None,
+            requested_spp: None,
+            interrupted: false,
         }
     }
 
@@ -109,6 +118,15 @@ impl RenderMetadata {
         if let Some(i) = &self.image {
             put("image", i.clone());
         }
+        if let Some((i, n)) = self.shard {
+            put("shard", format!("{i}/{n}"));
+        }
+        if let Some(r) = self.requested_spp {
+            put("requested_spp", r.to_string());
+        }
+        if self.interrupted {
+            put("interrupted", "true".into());
+        }
         m
     }
 
@@ -140,9 +158,28 @@ impl RenderMetadata {
             "merged" => None,
             s => Some(num("seed", s)?),
         };
+        let spp: u64 = num("spp", req(a, "spp")?)?;
+        let first_sample: u64 = opt(a, "first_sample")?.unwrap_or(0);
+        if spp == 0 {
+            return Err("metadata 'spp' is 0: an image of no samples".into());
+        }
+        if first_sample
+            .checked_add(spp)
+            .is_none_or(|end| end > u32::MAX as u64 + 1)
+        {
+            return Err(format!(
+                "metadata 'first_sample' {first_sample} + 'spp' {spp} is beyond the sample indices"
+            ));
+        }
+        let pass_spp: Option<u32> = opt(a, "pass_spp")?;
+        if pass_spp == Some(0) {
+            return Err("metadata 'pass_spp' is 0".into());
+        }
         let render_seconds: f64 = opt(a, "render_seconds")?.unwrap_or(0.0);
         let time_limit_seconds: Option<f64> = opt(a, "time_limit_seconds")?;
-        if !render_seconds.is_finite() || time_limit_seconds.is_some_and(|t| !t.is_finite()) {
+        if !(render_seconds.is_finite() && render_seconds >= 0.0)
+            || time_limit_seconds.is_some_and(|t| !t.is_finite())
+        {
             return Err("metadata times must be finite".into());
         }
         Ok(RenderMetadata {
@@ -150,8 +187,8 @@ impl RenderMetadata {
             scene_hash,
             width: num("width", req(a, "width")?)?,
             height: num("height", req(a, "height")?)?,
-            spp: num("spp", req(a, "spp")?)?,
-            first_sample: opt(a, "first_sample")?.unwrap_or(0),
+            spp,
+            first_sample,
             seed,
             strategy: Strategy {
                 sampler: parse_value(req(a, "sampler")?, "sampler")?,
@@ -165,10 +202,21 @@ impl RenderMetadata {
             max_depth: num("max_depth", req(a, "max_depth")?)?,
             render_seconds,
             nonfinite_samples: opt(a, "nonfinite_samples")?.unwrap_or(0),
-            pass_spp: opt(a, "pass_spp")?,
+            pass_spp,
             time_limit_seconds,
             merged_from: a.get("merged_from").cloned(),
             image: a.get("image").cloned(),
+            shard: a.get("shard").map(|v| parse_shard(v)).transpose()?,
+            requested_spp: opt(a, "requested_spp")?,
+            interrupted: match a.get("interrupted").map(String::as_str) {
+                None | Some("false") => false,
+                Some("true") => true,
+                Some(v) => {
+                    return Err(format!(
+                        "metadata 'interrupted' is '{v}', not true or false"
+                    ))
+                }
+            },
         })
     }
 
@@ -193,13 +241,41 @@ impl RenderMetadata {
         Ok(Some(m))
     }
 
-    /// Like [`RenderMetadata::from_image`], but the metadata must be there.
+    /// Like [`RenderMetadata::from_image`], for an image that must hold radiance: a `--variance`
+    /// image is refused.
+    pub fn radiance(img: &RgbImage, path: &Path) -> Result<Option<Self>> {
+        let m = Self::from_image(img, path)?;
+        if let Some(what) = m.as_ref().and_then(|m| m.image.as_ref()) {
+            return Err(Error::ImageRead {
+                path: path.to_path_buf(),
+                message: format!(
+                    "holds the {}, not a render's radiance",
+                    crate::error::clip(what)
+                ),
+            });
+        }
+        Ok(m)
+    }
+
+    /// Like [`RenderMetadata::radiance`], but the metadata must be there.
     pub fn require(img: &RgbImage, path: &Path) -> Result<Self> {
-        Self::from_image(img, path)?.ok_or_else(|| Error::ImageRead {
+        Self::radiance(img, path)?.ok_or_else(|| Error::ImageRead {
             path: path.to_path_buf(),
             message: "no vrpt metadata: not a vrpt render".into(),
         })
     }
+}
+
+/// `I/N` with `I < N` (a shard, as `--shard` takes it and metadata records it).
+pub fn parse_shard(s: &str) -> std::result::Result<(u32, u32), String> {
+    let bad = || format!("'{s}' is not a shard I/N (0 ≤ I < N, e.g. 0/4)");
+    let (i, n) = s.split_once('/').ok_or_else(bad)?;
+    let i: u32 = i.trim().parse().map_err(|_| bad())?;
+    let n: u32 = n.trim().parse().map_err(|_| bad())?;
+    if i >= n {
+        return Err(bad());
+    }
+    Ok((i, n))
 }
 
 /// Write a render: `output` as EXR (mean, variance-of-the-mean channels, metadata) or PNG
@@ -266,6 +342,9 @@ mod tests {
             time_limit_seconds: Some(0.5),
             merged_from: None,
             image: None,
+            shard: Some((2, 4)),
+            requested_spp: Some(128),
+            interrupted: true,
         };
         let a = m.to_attributes();
         assert_eq!(a["strategy"], "importance");

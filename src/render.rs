@@ -16,6 +16,8 @@ use crate::scene::Scene;
 use crate::strategy::Strategy;
 use glam::{DVec3, UVec2};
 use rayon::prelude::*;
+use std::ops::Range;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 /// Tile edge in pixels.
@@ -150,9 +152,9 @@ impl RenderStats {
     }
 }
 
-/// Something told how many pixels are done (a progress bar).
+/// Something told how much is done (a progress bar), in pixel samples.
 pub trait Progress: Sync {
-    fn advance(&self, pixels: u64);
+    fn advance(&self, pixel_samples: u64);
 }
 
 /// No progress reporting.
@@ -193,7 +195,7 @@ fn available_memory() -> Option<u64> {
 
 /// Refuse an image whose buffers cannot be allocated, before allocating any of them (an
 /// allocation failure aborts the process, with no error line).
-fn check_memory(width: u32, height: u32) -> Result<()> {
+pub fn check_memory(width: u32, height: u32) -> Result<()> {
     let need = width as u64 * height as u64 * BYTES_PER_PIXEL;
     match available_memory() {
         Some(have) if need > have => Err(Error::Settings(format!(
@@ -221,7 +223,7 @@ fn camera_for(scene: &Scene, settings: &RenderSettings) -> Result<Camera> {
     })
 }
 
-/// Render `scene` with `settings` into a new film.
+/// Render `scene` with `settings` into a new film: one pass of all the spp.
 pub fn render(
     scene: &Scene,
     settings: &RenderSettings,
@@ -229,90 +231,205 @@ pub fn render(
 ) -> Result<(Film, RenderStats)> {
     let camera = camera_for(scene, settings)?;
     with_threads(settings.threads, || {
-        render_on_pool(scene, &camera, settings, progress)
+        let mut film = Film::new(settings.width, settings.height);
+        let first = settings.first_sample;
+        let pass = SamplePass {
+            origin: first,
+            size: settings.spp,
+        };
+        let stats = render_range(
+            scene,
+            &camera,
+            settings,
+            pass,
+            first..first + settings.spp,
+            &mut film,
+            progress,
+        );
+        (film, stats)
     })
 }
 
-/// Render on the current rayon pool, with the sampler the strategy names.
-fn render_on_pool(
+/// A pass: the stratified set of `size` samples starting at sample `origin`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct SamplePass {
+    origin: u32,
+    size: u32,
+}
+
+/// Render the samples `range` (all within `pass`) into `film`, going on from the sums it holds,
+/// on the current rayon pool, with the sampler the strategy names.
+fn render_range(
     scene: &Scene,
     camera: &Camera,
     settings: &RenderSettings,
+    pass: SamplePass,
+    range: Range<u32>,
+    film: &mut Film,
     progress: &dyn Progress,
-) -> (Film, RenderStats) {
+) -> RenderStats {
+    let seed = settings.seed;
     match settings.strategy.sampler {
         SamplerKind::Independent => render_with(
             scene,
             camera,
             settings,
-            IndependentSampler::new(settings.seed),
+            IndependentSampler::new(seed),
+            range,
+            film,
             progress,
         ),
         SamplerKind::Stratified => render_with(
             scene,
             camera,
             settings,
-            StratifiedSampler::new(settings.seed, settings.spp),
+            StratifiedSampler::with_origin(seed, pass.size, pass.origin),
+            range,
+            film,
             progress,
         ),
         SamplerKind::Sobol => render_with(
             scene,
             camera,
             settings,
-            SobolSampler::new(settings.seed),
+            SobolSampler::new(seed),
+            range,
+            film,
             progress,
         ),
     }
 }
 
-/// How a render is split into passes, and when it stops.
-#[derive(Clone, Copy, Debug, PartialEq, Default)]
+/// How a render is split into passes, which part of it is rendered, and when it stops.
+#[derive(Clone, Copy, Debug, Default)]
 pub struct PassPlan {
     /// Samples per pixel per pass (the stratification unit); `None`: one pass of all the spp.
     pub pass_spp: Option<u32>,
     /// Stop after the first whole pass that ends past this wall time (at least one pass runs).
     pub time_limit: Option<Duration>,
+    /// Render only shard `i` of `n`: the samples `⌊i·spp/n⌋ .. ⌊(i+1)·spp/n⌋` of the render,
+    /// with the render's passes (a shard may begin or end inside a pass).
+    pub shard: Option<(u32, u32)>,
+    /// A flag that, once set (by a signal handler), stops the render after the current batch
+    /// of samples; the render is then cut into batches of about [`BATCH_SECONDS`].
+    pub stop: Option<&'static AtomicBool>,
+}
+
+/// Wall time a batch of samples aims at when a render can be stopped: a stop request waits
+/// about this long.
+pub const BATCH_SECONDS: f64 = 0.25;
+
+/// The samples `lo..hi` (relative to the render's first sample) of shard `i` of `n` of a render
+/// of `spp` samples per pixel: `⌊i·spp/n⌋ .. ⌊(i+1)·spp/n⌋`, so the shards are disjoint, cover
+/// the render, and differ in size by at most one sample.
+pub fn shard_range(spp: u32, (i, n): (u32, u32)) -> Result<Range<u32>> {
+    if n == 0 || i >= n {
+        return Err(Error::Settings(format!(
+            "shard {i}/{n}: the shard index must be below the shard count"
+        )));
+    }
+    let at = |k: u32| (k as u64 * spp as u64 / n as u64) as u32;
+    let r = at(i)..at(i + 1);
+    if r.is_empty() {
+        return Err(Error::Settings(format!(
+            "shard {i}/{n} of {spp} spp holds no samples: use at most {spp} shards"
+        )));
+    }
+    Ok(r)
+}
+
+/// What [`render_passes`] made.
+pub struct Rendered {
+    pub film: Film,
+    pub stats: RenderStats,
+    /// The samples rendered: `first_sample .. first_sample + spp` (the same for every pixel).
+    pub first_sample: u32,
+    pub spp: u32,
+    /// Whether the stop flag ended the render before all its samples.
+    pub interrupted: bool,
 }
 
 /// Render `settings.spp` samples per pixel as passes of `plan.pass_spp` samples (sample indices
-/// `first_sample + k·pass_spp ..`), merging them exactly, and stop early at a whole pass when
-/// `plan.time_limit` runs out. Returns the film, the summed stats and the spp reached.
+/// `first_sample + k·pass_spp ..`, a shorter last pass being a set of its own), merging them
+/// exactly; only the samples of `plan.shard`, if given. Stops early at a whole pass when
+/// `plan.time_limit` runs out, and after the current batch when `plan.stop` is set (a partial
+/// pass is still an unbiased estimate: every sample of a stratified or Sobol set is uniform on
+/// its own). Batches go on from the sums of the pass, so the image does not depend on them.
 pub fn render_passes(
     scene: &Scene,
     settings: &RenderSettings,
     plan: &PassPlan,
     progress: &dyn Progress,
-) -> Result<(Film, RenderStats, u32)> {
+) -> Result<Rendered> {
     let camera = camera_for(scene, settings)?;
     let pass = plan
         .pass_spp
         .unwrap_or(settings.spp)
         .clamp(1, settings.spp.max(1));
+    let range = match plan.shard {
+        Some(s) => shard_range(settings.spp, s)?,
+        None => 0..settings.spp,
+    };
+    let stopped = || plan.stop.is_some_and(|f| f.load(Ordering::Relaxed));
     let start = Instant::now();
     with_threads(settings.threads, || {
         let mut film = Film::new(settings.width, settings.height);
         let mut stats = RenderStats::default();
-        let mut done = 0u32;
-        while done < settings.spp {
-            let n = pass.min(settings.spp - done);
-            let pass_settings = RenderSettings {
-                spp: n,
-                first_sample: settings.first_sample + done,
-                ..settings.clone()
+        let mut done = range.start;
+        let mut interrupted = false;
+        // samples per batch: all of a pass unless the render can be stopped; then one sample
+        // first, then what fits in BATCH_SECONDS at the rate measured (at most 4× the last)
+        let mut batch = if plan.stop.is_some() { 1 } else { u32::MAX };
+        while done < range.end && !interrupted {
+            let pass_start = done / pass * pass;
+            let pass_end = (pass_start + pass).min(settings.spp);
+            let set = SamplePass {
+                origin: settings.first_sample + pass_start,
+                size: pass_end - pass_start,
             };
-            let (f, s) = render_on_pool(scene, &camera, &pass_settings, progress);
-            film.merge(&f).map_err(Error::Settings)?;
-            stats.rays.add(&s.rays);
-            stats.samples += s.samples;
-            stats.nonfinite += s.nonfinite;
-            stats.thread_time += s.thread_time;
-            done += n;
+            let end = pass_end.min(range.end);
+            let mut pass_film = Film::new(settings.width, settings.height);
+            while done < end {
+                let n = batch.min(end - done);
+                let t = Instant::now();
+                let first = settings.first_sample + done;
+                let s = render_range(
+                    scene,
+                    &camera,
+                    settings,
+                    set,
+                    first..first + n,
+                    &mut pass_film,
+                    progress,
+                );
+                stats.rays.add(&s.rays);
+                stats.samples += s.samples;
+                stats.nonfinite += s.nonfinite;
+                stats.thread_time += s.thread_time;
+                done += n;
+                if stopped() {
+                    interrupted = done < range.end;
+                    break;
+                }
+                if plan.stop.is_some() {
+                    let per_sample = t.elapsed().as_secs_f64() / n as f64;
+                    let fits = (BATCH_SECONDS / per_sample.max(1e-9)) as u32;
+                    batch = fits.clamp(1, n.saturating_mul(4));
+                }
+            }
+            film.merge(&pass_film).map_err(Error::Settings)?;
             if plan.time_limit.is_some_and(|t| start.elapsed() >= t) {
                 break;
             }
         }
         stats.elapsed = start.elapsed();
-        Ok((film, stats, done))
+        Ok(Rendered {
+            film,
+            stats,
+            first_sample: settings.first_sample + range.start,
+            spp: done - range.start,
+            interrupted,
+        })
     })?
 }
 
@@ -332,8 +449,10 @@ fn render_with<S: Sampler>(
     camera: &Camera,
     settings: &RenderSettings,
     sampler: S,
+    range: Range<u32>,
+    film: &mut Film,
     progress: &dyn Progress,
-) -> (Film, RenderStats) {
+) -> RenderStats {
     let start = Instant::now();
     let integrator = IntegratorSettings {
         max_depth: settings.max_depth,
@@ -364,8 +483,8 @@ fn render_with<S: Sampler>(
             for y in origin.y..origin.y + size.y {
                 for x in origin.x..origin.x + size.x {
                     let pixel = UVec2::new(x, y);
-                    let (mut sum, mut sum_sq, mut n) = (DVec3::ZERO, DVec3::ZERO, 0u64);
-                    for index in settings.first_sample..settings.first_sample + settings.spp {
+                    let (mut sum, mut sum_sq, mut n) = film.pixel_sums(film.index(x, y));
+                    for index in range.clone() {
                         sampler.start_pixel_sample(pixel, index);
                         let (o, d) = camera.generate_ray(pixel, CameraSample::draw(sampler).pixel);
                         let l = radiance(scene, o, d, sampler, &integrator, &mut tile.rays);
@@ -378,23 +497,22 @@ fn render_with<S: Sampler>(
                             tile.nonfinite += 1;
                         }
                     }
-                    tile.samples += settings.spp as u64;
+                    tile.samples += range.len() as u64;
                     tile.sums.push((sum, sum_sq, n));
                 }
             }
-            progress.advance((size.x * size.y) as u64);
+            progress.advance((size.x * size.y) as u64 * range.len() as u64);
             tile.time = tile_start.elapsed();
             tile
         })
         .collect();
-    let mut film = Film::new(settings.width, settings.height);
     let mut stats = RenderStats::default();
     for tile in tiles {
         let mut k = 0;
         for y in tile.origin.y..tile.origin.y + tile.size.y {
             for x in tile.origin.x..tile.origin.x + tile.size.x {
                 let (s, s2, n) = tile.sums[k];
-                film.add_pixel_sums(film.index(x, y), s, s2, n);
+                film.set_pixel_sums(film.index(x, y), s, s2, n);
                 k += 1;
             }
         }
@@ -404,5 +522,5 @@ fn render_with<S: Sampler>(
         stats.thread_time += tile.time;
     }
     stats.elapsed = start.elapsed();
-    (film, stats)
+    stats
 }

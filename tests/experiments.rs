@@ -252,16 +252,17 @@ fn merge_of_two_halves_equals_one_render() {
         };
         // the stratified full render is two passes of 32, as the halves are
         let whole = if sampler == SamplerKind::Stratified {
-            let (f, st, _) = vrpt::render::render_passes(
+            let r = vrpt::render::render_passes(
                 &scene,
                 &full,
                 &vrpt::render::PassPlan {
                     pass_spp: Some(32),
-                    time_limit: None,
+                    ..Default::default()
                 },
                 &vrpt::render::NoProgress,
             )
             .unwrap();
+            let (f, st) = (r.film, r.stats);
             RgbImage {
                 width: 16,
                 height: 16,

@@ -62,7 +62,7 @@ impl ExperimentSettings {
         runs: u32,
         threads: Option<usize>,
     ) -> Result<ExperimentSettings> {
-        let meta = RenderMetadata::from_image(reference, path)?;
+        let meta = RenderMetadata::radiance(reference, path)?;
         let max_depth = meta.as_ref().map_or_else(
             || {
                 scene
@@ -99,7 +99,7 @@ pub fn check_reference(scene: &Scene, reference: &RgbImage, s: &ExperimentSettin
     for r in &s.regions {
         r.check(s.width, s.height).map_err(&err)?;
     }
-    let Some(meta) = RenderMetadata::from_image(reference, Path::new("reference"))? else {
+    let Some(meta) = RenderMetadata::radiance(reference, Path::new("reference"))? else {
         return Ok(());
     };
     if meta.scene_hash != scene.hash {
@@ -210,8 +210,10 @@ pub fn compare(
                 let plan = PassPlan {
                     pass_spp: Some(spp),
                     time_limit: equal_time,
+                    ..PassPlan::default()
                 };
-                let (film, stats, reached) = render_passes(scene, &settings, &plan, &NoProgress)?;
+                let r = render_passes(scene, &settings, &plan, &NoProgress)?;
+                let (film, stats, reached) = (r.film, r.stats, r.spp);
                 let img = film.mean_image();
                 ms.push(metrics(&img, &reference.pixels));
                 for (r, m) in s.regions.iter().zip(&mut region_ms) {
@@ -357,8 +359,8 @@ pub fn converge(
                 let (mut mse, mut rel, mut secs) = (0.0, 0.0, 0.0);
                 for k in 0..s.runs {
                     let settings = run_settings(st, s, spp, k);
-                    let (film, stats, _) =
-                        render_passes(scene, &settings, &PassPlan::default(), &NoProgress)?;
+                    let r = render_passes(scene, &settings, &PassPlan::default(), &NoProgress)?;
+                    let (film, stats) = (r.film, r.stats);
                     let m = metrics(&film.mean_image(), &reference.pixels);
                     mse += m.mse;
                     rel += m.rel_mse;

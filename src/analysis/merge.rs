@@ -128,6 +128,9 @@ pub fn merge(inputs: &[MergeInput]) -> Result<(RgbImage, RenderMetadata)> {
         pass_spp: None,
         time_limit_seconds: None,
         image: None,
+        shard: None,
+        requested_spp: None,
+        interrupted: inputs.iter().any(|i| i.meta.interrupted),
         ..first.clone()
     };
     let image = RgbImage {

@@ -156,11 +156,24 @@ pub struct StratifiedSampler {
     /// Index of the current sample within its pass.
     j: u32,
     dim: u64,
+    /// Index of the first sample of the first pass, and that pass's number (`origin / N`).
+    origin: u32,
+    pass_base: u32,
 }
 
 impl StratifiedSampler {
-    /// A sampler for `samples_per_pass` samples per pixel per pass (normally the spp).
+    /// A sampler for `samples_per_pass` samples per pixel per pass (normally the spp), passes
+    /// starting at sample 0.
     pub fn new(seed: u64, samples_per_pass: u32) -> Self {
+        Self::with_origin(seed, samples_per_pass, 0)
+    }
+
+    /// A sampler whose passes of `samples_per_pass` start at sample `origin`: sample `i` is
+    /// number `(i − origin) mod N` of pass `(i − origin) / N + ⌊origin / N⌋`, so an origin that
+    /// is a multiple of N gives the passes of [`StratifiedSampler::new`], and a shorter last
+    /// pass of a render (spp not a multiple of the pass size) is one whole set of its own size.
+    /// Indices below `origin` are not valid.
+    pub fn with_origin(seed: u64, samples_per_pass: u32, origin: u32) -> Self {
         let n = samples_per_pass.max(1);
         let (a, b) = grid_shape(n);
         StratifiedSampler {
@@ -177,6 +190,8 @@ impl StratifiedSampler {
             key: 0,
             j: 0,
             dim: 0,
+            origin,
+            pass_base: origin / n,
         }
     }
 
@@ -198,8 +213,10 @@ impl StratifiedSampler {
 impl Sampler for StratifiedSampler {
     #[inline]
     fn start_pixel_sample(&mut self, pixel: UVec2, index: u32) {
-        let pass = self.div_n.div(index);
-        self.j = index - pass * self.n;
+        let rel = index.wrapping_sub(self.origin);
+        let p = self.div_n.div(rel);
+        self.j = rel - p * self.n;
+        let pass = p + self.pass_base;
         self.key = hash_words(&[
             self.seed ^ 0x5354_5241_5449_4649, // "STRATIFI": other streams than independent
             ((pixel.x as u64) << 32) | pixel.y as u64,

@@ -21,6 +21,10 @@
 use crate::error::{Error, Result};
 use serde::Deserialize;
 use std::path::Path;
+use toml::Spanned;
+
+/// A value with where it stood in the file (byte range), for errors that name the line.
+pub type At<T> = Spanned<T>;
 
 /// The whole file.
 #[derive(Clone, Debug, Default, Deserialize, PartialEq)]
@@ -37,28 +41,28 @@ pub struct Description {
 #[derive(Clone, Debug, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct CameraSection {
-    pub eye: [f32; 3],
-    pub target: [f32; 3],
+    pub eye: At<[f32; 3]>,
+    pub target: At<[f32; 3]>,
     #[serde(default = "default_up")]
-    pub up: [f32; 3],
+    pub up: At<[f32; 3]>,
     /// Vertical field of view in degrees.
     #[serde(default = "default_fov")]
-    pub fov: f32,
+    pub fov: At<f32>,
 }
 
-fn default_up() -> [f32; 3] {
-    [0.0, 1.0, 0.0]
+fn default_up() -> At<[f32; 3]> {
+    Spanned::new(0..0, [0.0, 1.0, 0.0])
 }
 
-fn default_fov() -> f32 {
-    40.0
+fn default_fov() -> At<f32> {
+    Spanned::new(0..0, 40.0)
 }
 
 /// `[environment]`: constant radiance for rays that escape.
 #[derive(Clone, Debug, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct EnvironmentSection {
-    pub radiance: [f32; 3],
+    pub radiance: At<[f32; 3]>,
 }
 
 /// `[render]`: defaults that command-line flags override.
@@ -71,6 +75,11 @@ pub struct RenderSection {
     pub max_depth: Option<u32>,
 }
 
+/// The largest image side, as `--width` and `--height` allow.
+pub const MAX_SIDE: u32 = 65536;
+/// The longest path, as `--max-depth` allows.
+pub const MAX_DEPTH: u32 = 1024;
+
 impl Description {
     /// Read and parse `path`.
     pub fn load(path: &Path) -> Result<Description> {
@@ -81,46 +90,89 @@ impl Description {
         })
     }
 
-    /// Parse the text of a description; the error is one line with the TOML position.
+    /// Parse the text of a description; the error is one line with the TOML position, and a
+    /// value out of range names its line and field.
     pub fn parse(text: &str) -> Result<Description, String> {
+        let line_of = |at: usize| text[..at.min(text.len())].matches('\n').count() + 1;
         let d: Description = toml::from_str(text).map_err(|e| {
-            let msg = e.message().trim().to_string();
+            let msg = crate::error::clip_line(e.message().trim()).into_owned();
             match e.span() {
-                Some(span) => {
-                    let line = text[..span.start.min(text.len())].matches('\n').count() + 1;
-                    format!("line {line}: {msg}")
-                }
+                Some(span) => format!("line {}: {msg}", line_of(span.start)),
                 None => msg,
             }
         })?;
-        let finite = |v: &[f32]| v.iter().all(|x| x.is_finite());
-        if let Some(c) = &d.camera {
-            if !finite(&c.eye) || !finite(&c.target) || !finite(&c.up) {
-                return Err("camera: coordinates must be finite numbers".into());
+        // "line N: camera.eye: ..." (no line for a default, which is always valid)
+        let bad = |span: std::ops::Range<usize>, field: &str, what: String| {
+            if span.is_empty() {
+                format!("{field}: {what}")
+            } else {
+                format!("line {}: {field}: {what}", line_of(span.start))
             }
-            if !(c.fov > 0.0 && c.fov < 180.0) {
-                return Err(format!("camera: fov {} is not in (0, 180) degrees", c.fov));
+        };
+        let coords = |v: &At<[f32; 3]>, field: &str, min: f32| -> Result<(), String> {
+            let m = crate::scene::obj::MAX_MAGNITUDE;
+            match v.get_ref().iter().find(|x| !(min..=m).contains(*x)) {
+                None => Ok(()),
+                Some(x) if !x.is_finite() => {
+                    Err(bad(v.span(), field, format!("{x} is not a finite number")))
+                }
+                Some(x) => Err(bad(
+                    v.span(),
+                    field,
+                    format!("{x} is outside [{min:e}, {m:e}]"),
+                )),
+            }
+        };
+        if let Some(c) = &d.camera {
+            let m = crate::scene::obj::MAX_MAGNITUDE;
+            coords(&c.eye, "camera.eye", -m)?;
+            coords(&c.target, "camera.target", -m)?;
+            coords(&c.up, "camera.up", -m)?;
+            let fov = *c.fov.get_ref();
+            if !(fov > 0.0 && fov < 180.0) {
+                return Err(bad(
+                    c.fov.span(),
+                    "camera.fov",
+                    format!("{fov} is not in (0, 180) degrees"),
+                ));
             }
         }
         if let Some(e) = &d.environment {
-            if !finite(&e.radiance) || e.radiance.iter().any(|&x| x < 0.0) {
-                return Err("environment: radiance must be finite and non-negative".into());
-            }
+            coords(&e.radiance, "environment.radiance", 0.0)?;
         }
         if let Some(r) = &d.render {
-            for (name, v) in [
-                ("width", r.width),
-                ("height", r.height),
-                ("spp", r.spp),
-                ("max_depth", r.max_depth),
+            for (name, v, max) in [
+                ("width", r.width, MAX_SIDE),
+                ("height", r.height, MAX_SIDE),
+                ("spp", r.spp, u32::MAX),
+                ("max_depth", r.max_depth, MAX_DEPTH),
             ] {
-                if v == Some(0) {
-                    return Err(format!("render: {name} must be at least 1"));
+                if let Some(v) = v.filter(|&v| v == 0 || v > max) {
+                    let line = key_line(text, "render", name)
+                        .map_or(String::new(), |n| format!("line {n}: "));
+                    return Err(format!("{line}render.{name}: {v} is not in 1..={max}"));
                 }
             }
         }
         Ok(d)
     }
+}
+
+/// The line (from 1) where `key = …` stands in `[section]`.
+fn key_line(text: &str, section: &str, key: &str) -> Option<usize> {
+    let mut current = "";
+    for (n, line) in text.lines().enumerate() {
+        let l = line.trim();
+        if let Some(h) = l.strip_prefix('[').and_then(|h| h.strip_suffix(']')) {
+            current = h.trim();
+        } else if current == section
+            && l.strip_prefix(key)
+                .is_some_and(|r| r.trim_start().starts_with('='))
+        {
+            return Some(n + 1);
+        }
+    }
+    None
 }
 
 #[cfg(test)]
@@ -134,7 +186,7 @@ mod tests {
         )
         .unwrap();
         assert_eq!(d.obj, "a.obj");
-        assert_eq!(d.camera.unwrap().fov, 40.0);
+        assert_eq!(*d.camera.unwrap().fov.get_ref(), 40.0);
         assert_eq!(d.render.unwrap().spp, Some(4));
         let e = Description::parse("obj = \"a.obj\"\n[camera]\neye=[0,0,1]\ntargt=[0,0,0]\n")
             .unwrap_err();

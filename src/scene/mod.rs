@@ -309,12 +309,14 @@ pub fn load(path: &Path) -> Result<Scene> {
     let options = match desc {
         Some(d) => SceneOptions {
             camera: d.camera.map(|c| CameraDesc {
-                eye: Vec3::from_array(c.eye),
-                target: Vec3::from_array(c.target),
-                up: Vec3::from_array(c.up),
-                fov_deg: c.fov,
+                eye: Vec3::from_array(c.eye.into_inner()),
+                target: Vec3::from_array(c.target.into_inner()),
+                up: Vec3::from_array(c.up.into_inner()),
+                fov_deg: c.fov.into_inner(),
             }),
-            environment: d.environment.map(|e| Vec3::from_array(e.radiance)),
+            environment: d
+                .environment
+                .map(|e| Vec3::from_array(e.radiance.into_inner())),
             defaults: d.render.unwrap_or_default(),
         },
         None => SceneOptions::default(),

@@ -7,7 +7,7 @@
 //! light pre-scan (tobj reports the kind of error only).
 
 use super::{Mesh, MeshTriangle};
-use crate::error::{Error, Result};
+use crate::error::{clip, Error, Result};
 use crate::material::Material;
 use glam::{Vec2, Vec3};
 use std::collections::BTreeSet;
@@ -22,12 +22,26 @@ pub fn load_obj(path: &Path) -> Result<(Mesh, Vec<Material>, Vec<String>)> {
         single_index: true,
         ..Default::default()
     };
-    let (models, materials) = tobj::load_obj(path, &options).map_err(|e| Error::Obj {
+    let obj_error = |message: String| Error::Obj {
         path: path.to_path_buf(),
-        message: locate_obj_error(&text).unwrap_or_else(|| e.to_string()),
-    })?;
-
+        message,
+    };
+    check_obj_text(&text).map_err(obj_error)?;
     let mtl_path = mtllib_path(path, &text);
+    let folder = path.parent().unwrap_or(Path::new("."));
+    for name in text
+        .lines()
+        .filter_map(|l| l.trim().strip_prefix("mtllib "))
+    {
+        let p = folder.join(name.trim());
+        if p.is_file() {
+            let mtl = crate::error::read_text(&p)?;
+            check_mtl_text(&mtl).map_err(|message| Error::Mtl { path: p, message })?;
+        }
+    }
+    let (models, materials) =
+        tobj::load_obj(path, &options).map_err(|e| obj_error(e.to_string()))?;
+
     let mut mats: Vec<Material> = Vec::new();
     match materials {
         Ok(list) => {
@@ -36,7 +50,7 @@ pub fn load_obj(path: &Path) -> Result<(Mesh, Vec<Material>, Vec<String>)> {
                 if scaled {
                     warnings.push(format!(
                         "material '{}': Kd + Ks > 1, scaled down to conserve energy",
-                        m.name
+                        clip(&m.name)
                     ));
                 }
                 mats.push(mat);
@@ -67,8 +81,9 @@ pub fn load_obj(path: &Path) -> Result<(Mesh, Vec<Material>, Vec<String>)> {
         .collect();
     for n in &unknown {
         warnings.push(format!(
-            "{}: material '{n}' is not defined, using grey diffuse",
-            path.display()
+            "{}: material '{}' is not defined, using grey diffuse",
+            path.display(),
+            clip(n)
         ));
     }
     let fallback = mats.len() as u32;
@@ -167,51 +182,156 @@ fn mtllib_path(obj: &Path, text: &str) -> Option<PathBuf> {
     Some(obj.parent().unwrap_or(Path::new(".")).join(name))
 }
 
-/// Find the first line that tobj would reject, for an error message with a line number.
-fn locate_obj_error(text: &str) -> Option<String> {
+/// The largest coordinate or emission a scene may hold: squares of it (lengths, sums of
+/// squared radiance) stay finite in f32.
+pub const MAX_MAGNITUDE: f32 = 1e15;
+
+/// Check every line of an OBJ before tobj reads it, so an error names its line: the numbers of
+/// `v`, `vt`, `vn` parse, are finite and (positions) at most [`MAX_MAGNITUDE`]; the indices of
+/// `f`, `l` and `p` (positions, texture coordinates and normals, 1-based or negative relative)
+/// point at elements defined before them, whether or not vrpt uses that attribute.
+pub fn check_obj_text(text: &str) -> std::result::Result<(), String> {
     let mut counts = [0usize; 3]; // v, vt, vn
     for (no, line) in text.lines().enumerate() {
         let mut words = line.split_whitespace();
         let Some(tag) = words.next() else { continue };
-        let rest: Vec<&str> = words.collect();
-        let floats_ok = |min: usize, max: usize| {
-            rest.len() >= min && rest.len() <= max && rest.iter().all(|w| w.parse::<f32>().is_ok())
+        let at = |what: String| format!("line {}: {what}: '{}'", no + 1, clip(line.trim()));
+        let floats = |min: usize, max: usize| -> std::result::Result<Vec<f32>, String> {
+            let rest: Vec<&str> = line.split_whitespace().skip(1).collect();
+            if rest.len() < min || rest.len() > max {
+                let n = if min == max {
+                    min.to_string()
+                } else {
+                    format!("{min} to {max}")
+                };
+                return Err(at(format!("{tag} needs {n} numbers, found {}", rest.len())));
+            }
+            rest.iter()
+                .map(|w| match w.parse::<f32>() {
+                    Ok(x) if x.is_finite() => Ok(x),
+                    Ok(_) => Err(at(format!("{tag}: '{}' is not a finite number", clip(w)))),
+                    Err(_) => Err(at(format!("{tag}: '{}' is not a number", clip(w)))),
+                })
+                .collect()
         };
-        let bad = match tag {
+        match tag {
             "v" => {
+                let x = floats(3, 6)?;
+                let p = match x.len() {
+                    3 | 6 => [x[0], x[1], x[2]],
+                    4 if x[3] != 0.0 => [x[0] / x[3], x[1] / x[3], x[2] / x[3]],
+                    4 => return Err(at("v: the weight w is 0".into())),
+                    _ => {
+                        return Err(at(
+                            "v needs 3, 4 (x y z w) or 6 (x y z r g b) numbers".into()
+                        ))
+                    }
+                };
+                if p.iter().any(|c| c.abs() > MAX_MAGNITUDE) {
+                    return Err(at(format!("v: a coordinate is beyond ±{MAX_MAGNITUDE:e}")));
+                }
                 counts[0] += 1;
-                !floats_ok(3, 7)
             }
             "vt" => {
+                floats(2, 3)?;
                 counts[1] += 1;
-                !floats_ok(1, 3)
             }
             "vn" => {
+                floats(3, 3)?;
                 counts[2] += 1;
-                !floats_ok(3, 3)
             }
-            "f" => {
-                rest.len() < 3
-                    || rest.iter().any(|w| {
-                        w.split('/').enumerate().any(|(k, idx)| {
-                            if idx.is_empty() {
-                                return k == 0;
-                            }
-                            match idx.parse::<i64>() {
-                                Ok(i) => {
-                                    let n = counts[[0, 1, 2][k.min(2)]] as i64;
-                                    i == 0 || i > n || -i > n
-                                }
-                                Err(_) => true,
-                            }
-                        })
-                    })
+            "f" | "l" | "p" => {
+                let min = match tag {
+                    "f" => 3,
+                    "l" => 2,
+                    _ => 1,
+                };
+                let refs: Vec<&str> = words.collect();
+                if refs.len() < min {
+                    return Err(at(format!("{tag} needs at least {min} vertices")));
+                }
+                for r in refs {
+                    check_vertex_ref(r, &counts).map_err(&at)?;
+                }
             }
-            _ => false,
-        };
-        if bad {
-            return Some(format!("line {}: cannot parse '{}'", no + 1, line.trim()));
+            _ => {}
         }
     }
-    None
+    Ok(())
+}
+
+/// One vertex of a face, line or point: `v`, `v/vt`, `v//vn` or `v/vt/vn`.
+fn check_vertex_ref(r: &str, counts: &[usize; 3]) -> std::result::Result<(), String> {
+    const WHAT: [&str; 3] = ["position", "texture coordinate", "normal"];
+    let parts: Vec<&str> = r.split('/').collect();
+    if parts.len() > 3 {
+        return Err(format!("'{}' is not a vertex reference", clip(r)));
+    }
+    for (k, idx) in parts.iter().enumerate() {
+        if idx.is_empty() {
+            if k == 0 || (k == 1 && parts.len() == 2) {
+                return Err(format!("'{}' is not a vertex reference", clip(r)));
+            }
+            continue;
+        }
+        let n = counts[k] as i64;
+        let i: i64 = idx
+            .parse()
+            .map_err(|_| format!("'{}' is not an index", clip(idx)))?;
+        if i == 0 || i > n || -i > n {
+            return Err(format!(
+                "{} index {} is out of range ({n} defined before this line)",
+                WHAT[k],
+                clip(idx)
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Check the numbers of an MTL file by line: colours (`Ka`, `Kd`, `Ks`, `Ke`, `Tf`) three numbers
+/// (tobj reads three and panics on fewer), finite, non-negative and at most [`MAX_MAGNITUDE`]; `Ns` in `[0, 1e6]`; `Ni`, `d`, `Tr` finite.
+pub fn check_mtl_text(text: &str) -> std::result::Result<(), String> {
+    for (no, line) in text.lines().enumerate() {
+        let mut words = line.split_whitespace();
+        let Some(tag) = words.next() else { continue };
+        let at = |what: String| format!("line {}: {what}: '{}'", no + 1, clip(line.trim()));
+        let (lo, hi) = match tag {
+            "Ka" | "Kd" | "Ks" | "Ke" | "Tf" => (0.0, MAX_MAGNITUDE),
+            "Ns" => (0.0, 1e6),
+            "Ni" | "d" | "Tr" => (f32::MIN, f32::MAX),
+            _ => continue,
+        };
+        let rest: Vec<&str> = words.collect();
+        // `Kd spectral file.rfl` and `Kd xyz x y z` name other forms; vrpt reads RGB only, so
+        // only plain numbers are checked
+        if rest
+            .first()
+            .is_some_and(|w| w.eq_ignore_ascii_case("spectral") || w.eq_ignore_ascii_case("xyz"))
+        {
+            continue;
+        }
+        let colour = lo == 0.0 && hi == MAX_MAGNITUDE;
+        if colour && rest.len() != 3 {
+            return Err(at(format!(
+                "{tag} needs 3 numbers (r g b), found {}",
+                rest.len()
+            )));
+        }
+        if rest.is_empty() {
+            return Err(at(format!("{tag} has no value")));
+        }
+        for w in rest {
+            let x: f32 = w
+                .parse()
+                .map_err(|_| at(format!("{tag}: '{}' is not a number", clip(w))))?;
+            if !x.is_finite() {
+                return Err(at(format!("{tag}: '{}' is not a finite number", clip(w))));
+            }
+            if !(lo..=hi).contains(&x) {
+                return Err(at(format!("{tag}: {x} is outside [{lo}, {hi:e}]")));
+            }
+        }
+    }
+    Ok(())
 }

@@ -1,0 +1,469 @@
+//! Hostile input, class by class: non-finite or absurd numbers in OBJ, MTL and scene.toml
+//! (refused with file, line and field), indices that point outside what the file defines,
+//! error messages of bounded length, images whose metadata or header disagrees with their
+//! content. Each gives one error line and a non-zero exit, never a panic or an image.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn vrpt(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_vrpt"))
+        .args(args)
+        .output()
+        .expect("run vrpt")
+}
+
+/// One error line holding every string of `expect`, a non-zero exit, no panic.
+fn assert_refused(out: &Output, what: &str, expect: &[&str]) {
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{what}: should fail");
+    assert!(!stderr.contains("panicked"), "{what}: panicked: {stderr}");
+    let lines: Vec<&str> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
+    assert_eq!(lines.len(), 1, "{what}: one line expected, got: {stderr}");
+    for e in expect {
+        assert!(lines[0].contains(e), "{what}: '{}' lacks '{e}'", lines[0]);
+    }
+}
+
+const MTL: &str = "newmtl white\nKd 0.7 0.7 0.7\nnewmtl light\nKd 0 0 0\nKe 10 10 10\n";
+const OBJ: &str = "mtllib s.mtl\nv -1 0 -1\nv 1 0 -1\nv 1 0 1\nv -1 0 1\nvt 0 0\nvt 1 0\n\
+                   vt 1 1\nvn 0 1 0\nusemtl white\nf 1/1/1 3/3/1 2/2/1\nf 1/1/1 4/3/1 3/3/1\n\
+                   v -0.1 0.9 -0.1\nv 0.1 0.9 -0.1\nv 0 0.9 0.1\nusemtl light\nf 5 7 6\n";
+const TOML: &str = "obj = \"s.obj\"\n[camera]\neye = [0.0, 0.5, 3.0]\ntarget = [0.0, 0.5, 0.0]\n\
+                    fov = 40.0\n[environment]\nradiance = [0.1, 0.1, 0.1]\n[render]\n\
+                    width = 8\nheight = 8\nspp = 2\n";
+
+/// A scene folder with the three files, `edit` applied to one of them.
+fn scene(dir: &Path, file: &str, edit: impl Fn(&str) -> String) -> PathBuf {
+    for (name, text) in [("s.obj", OBJ), ("s.mtl", MTL), ("scene.toml", TOML)] {
+        let t = if name == file {
+            edit(text)
+        } else {
+            text.to_string()
+        };
+        std::fs::write(dir.join(name), t).unwrap();
+    }
+    dir.to_path_buf()
+}
+
+fn render(dir: &Path) -> Output {
+    let out = dir.join("out.png");
+    let o = vrpt(&[
+        "render",
+        dir.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "-q",
+    ]);
+    assert!(!out.exists() || o.status.success(), "an image on failure");
+    o
+}
+
+#[test]
+fn the_unedited_scene_renders() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = render(&scene(dir.path(), "", str::to_string));
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+#[test]
+fn non_finite_and_absurd_numbers_are_refused_with_file_line_and_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let cases: &[(&str, &str, &str, &[&str])] = &[
+        // (file, text replaced, replacement, the error holds)
+        (
+            "s.obj",
+            "v -1 0 -1",
+            "v nan 0 -1",
+            &["s.obj", "line 2", "v: 'nan' is not a finite"],
+        ),
+        (
+            "s.obj",
+            "v 1 0 -1",
+            "v 1 inf -1",
+            &["s.obj", "line 3", "not a finite"],
+        ),
+        (
+            "s.obj",
+            "v 1 0 1",
+            "v 1 0 1e39",
+            &["line 4", "not a finite"],
+        ),
+        ("s.obj", "v 1 0 1", "v 1 0 1e30", &["line 4", "beyond"]),
+        ("s.obj", "v 1 0 1", "v 1 0 1 1e-30", &["line 4", "beyond"]),
+        ("s.obj", "v 1 0 1", "v 1 0 1 0", &["line 4", "w is 0"]),
+        (
+            "s.obj",
+            "vt 1 0",
+            "vt NaN 0",
+            &["line 7", "vt", "not a finite"],
+        ),
+        (
+            "s.obj",
+            "vn 0 1 0",
+            "vn 0 -inf 0",
+            &["line 9", "vn", "not a finite"],
+        ),
+        (
+            "s.mtl",
+            "Kd 0.7 0.7 0.7",
+            "Kd 0.7 nan 0.7",
+            &["s.mtl", "line 2", "Kd", "not a finite"],
+        ),
+        (
+            "s.mtl",
+            "Ke 10 10 10",
+            "Ke 10 1e38 10",
+            &["s.mtl", "line 5", "Ke", "outside"],
+        ),
+        (
+            "s.mtl",
+            "Kd 0 0 0",
+            "Kd 0 -1 0",
+            &["line 4", "Kd", "outside"],
+        ),
+        (
+            "s.mtl",
+            "Kd 0 0 0",
+            "Kd 0 0 0\nNs -4",
+            &["line 5", "Ns", "outside"],
+        ),
+        (
+            "s.mtl",
+            "Kd 0 0 0",
+            "Kd 0 0 0\nNs inf",
+            &["line 5", "Ns", "not a finite"],
+        ),
+        (
+            "s.mtl",
+            "Kd 0 0 0",
+            "Kd 0 0 0\nd nan",
+            &["line 5", "d: 'nan'"],
+        ),
+        (
+            "scene.toml",
+            "eye = [0.0, 0.5, 3.0]",
+            "eye = [nan, 0.5, 3.0]",
+            &["scene.toml", "line 3", "camera.eye", "not a finite"],
+        ),
+        (
+            "scene.toml",
+            "target = [0.0, 0.5, 0.0]",
+            "target = [0.0, 1e20, 0.0]",
+            &["line 4", "camera.target", "outside"],
+        ),
+        (
+            "scene.toml",
+            "fov = 40.0",
+            "fov = inf",
+            &["line 5", "camera.fov"],
+        ),
+        (
+            "scene.toml",
+            "fov = 40.0",
+            "fov = nan",
+            &["line 5", "camera.fov"],
+        ),
+        (
+            "scene.toml",
+            "fov = 40.0",
+            "up = [0.0, -inf, 0.0]",
+            &["line 5", "camera.up"],
+        ),
+        (
+            "scene.toml",
+            "radiance = [0.1, 0.1, 0.1]",
+            "radiance = [0.1, -0.1, 0.1]",
+            &["line 7", "environment.radiance", "outside"],
+        ),
+        (
+            "scene.toml",
+            "radiance = [0.1, 0.1, 0.1]",
+            "radiance = [0.1, +inf, 0.1]",
+            &["line 7", "environment.radiance", "not a finite"],
+        ),
+        (
+            "scene.toml",
+            "width = 8",
+            "width = 10000000",
+            &["line 9", "render.width"],
+        ),
+        (
+            "scene.toml",
+            "spp = 2",
+            "spp = 0",
+            &["line 11", "render.spp"],
+        ),
+        ("scene.toml", "spp = 2", "spp = 1e400", &["line 11"]),
+    ];
+    for (file, from, to, expect) in cases {
+        let dir = scene(d, file, |t| {
+            assert!(t.contains(from), "{from}");
+            t.replacen(from, to, 1)
+        });
+        assert_refused(&render(&dir), &format!("{file}: {to}"), expect);
+    }
+}
+
+#[test]
+fn indices_outside_the_file_are_refused_whatever_the_attribute() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // (face line 11 replaced by …, the error holds); 4 v, 3 vt and 1 vn stand before line 11
+    let faces: &[(&str, &[&str])] = &[
+        (
+            "f 1/1/1 3/3/1 5/2/1",
+            &["line 11", "position index 5", "4 defined"],
+        ),
+        (
+            "f 1/1/1 3/4/1 2/2/1",
+            &["line 11", "texture coordinate index 4", "3 defined"],
+        ),
+        (
+            "f 1/1/1 3/3/2 2/2/1",
+            &["line 11", "normal index 2", "1 defined"],
+        ),
+        ("f 1//1 3//1 2//9", &["line 11", "normal index 9"]),
+        ("f -5 -1 -2", &["line 11", "position index -5"]),
+        ("f 0 1 2", &["line 11", "position index 0"]),
+        (
+            "f 1/-4 2/1 3/1",
+            &["line 11", "texture coordinate index -4"],
+        ),
+        ("f 1 2 99999999999999999999", &["line 11", "not an index"]),
+        ("f 1 2", &["line 11", "at least 3"]),
+        ("f 1 2 3/1/1/1", &["line 11", "not a vertex reference"]),
+        // lines and points: vrpt draws neither, but their indices must still exist
+        ("l 1 9", &["line 11", "position index 9"]),
+        ("p 1 2 7", &["line 11", "position index 7"]),
+        // a face may not refer to a vertex defined after it
+        ("f 1 2 6", &["line 11", "position index 6"]),
+    ];
+    for (face, expect) in faces {
+        let dir = scene(d, "s.obj", |t| t.replacen("f 1/1/1 3/3/1 2/2/1", face, 1));
+        assert_refused(&render(&dir), face, expect);
+    }
+}
+
+/// An error quotes at most a short prefix of what it found: a 1 MB line or value comes back as
+/// a line of at most 400 characters (the printed error's cap; quotes themselves are cut at
+/// 40).
+#[test]
+fn errors_quote_a_bounded_prefix() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let mega = "9".repeat(1 << 20);
+    let check = |out: &Output, what: &str| {
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{what}");
+        assert!(!stderr.contains("panicked"), "{what}");
+        assert!(
+            stderr.len() <= 600,
+            "{what}: {} bytes of stderr",
+            stderr.len()
+        );
+        assert_eq!(stderr.lines().count(), 1, "{what}: {stderr}");
+    };
+    let obj_line = format!("v 0 0 {mega}x");
+    check(
+        &render(&scene(d, "s.obj", |t| t.replacen("v 1 0 1", &obj_line, 1))),
+        "obj",
+    );
+    let face = format!("f 1 2 {mega}");
+    check(
+        &render(&scene(d, "s.obj", |t| t.replacen("f 5 7 6", &face, 1))),
+        "face",
+    );
+    let mtl_line = format!("Kd 0.5 0.5 {mega}a");
+    check(
+        &render(&scene(d, "s.mtl", |t| {
+            t.replacen("Kd 0.7 0.7 0.7", &mtl_line, 1)
+        })),
+        "mtl",
+    );
+    let toml_line = format!("fov = \"{mega}\"");
+    check(
+        &render(&scene(d, "scene.toml", |t| {
+            t.replacen("fov = 40.0", &toml_line, 1)
+        })),
+        "toml",
+    );
+    let toml_key = format!("{mega} = 1\n");
+    check(
+        &render(&scene(d, "scene.toml", |t| format!("{toml_key}{t}"))),
+        "toml key",
+    );
+    // a flag value is quoted by the argument parser: the printed line is cut (100 KB: Linux
+    // takes at most 128 KiB per argument)
+    let cb = common::cornell_path();
+    let long = "9".repeat(100_000);
+    check(
+        &vrpt(&["render", cb.to_str().unwrap(), "--spp", &long]),
+        "flag",
+    );
+    // a material name in a warning is cut too
+    let name = "m".repeat(1 << 20);
+    let dir2 = scene(d, "s.obj", |t| {
+        t.replacen("usemtl white", &format!("usemtl {name}"), 1)
+    });
+    let out = render(&dir2);
+    assert!(out.status.success());
+    assert!(
+        out.stderr.len() < 600,
+        "{} bytes of warnings",
+        out.stderr.len()
+    );
+}
+
+/// Render a 4×4 EXR and return its path.
+fn small_exr(dir: &Path, name: &str, seed: &str) -> PathBuf {
+    let p = dir.join(name);
+    let out = vrpt(&[
+        "render",
+        common::cornell_path().to_str().unwrap(),
+        "-o",
+        p.to_str().unwrap(),
+        "--width",
+        "4",
+        "--height",
+        "4",
+        "--spp",
+        "2",
+        "--seed",
+        seed,
+        "-q",
+    ]);
+    assert!(out.status.success());
+    p
+}
+
+/// Metadata that disagrees with the pixels, or pixels no render holds, are refused by every
+/// command that reads images: merge, diff, compare and converge.
+#[test]
+fn images_whose_metadata_or_content_is_wrong_are_refused() {
+    use vrpt::image_io::{read_exr, write_exr};
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let a = small_exr(d, "a.exr", "0");
+    let img = read_exr(&a).unwrap();
+    let edited = |name: &str, key: &str, value: Option<&str>| {
+        let mut meta = img.metadata.clone();
+        match value {
+            Some(v) => meta.insert(key.into(), v.into()),
+            None => meta.remove(key),
+        };
+        let p = d.join(name);
+        write_exr(&p, 4, 4, &img.pixels, img.variance.as_deref(), &meta).unwrap();
+        p
+    };
+    let mut bad: Vec<(PathBuf, &[&str])> = vec![
+        (edited("spp0.exr", "spp", Some("0")), &["'spp' is 0"]),
+        (edited("sppneg.exr", "spp", Some("-3")), &["'spp'"]),
+        (
+            edited("overflow.exr", "first_sample", Some("18446744073709551615")),
+            &["first_sample"],
+        ),
+        (edited("wide.exr", "width", Some("5")), &["5×4"]),
+        (edited("pass0.exr", "pass_spp", Some("0")), &["pass_spp"]),
+        (edited("shard.exr", "shard", Some("4/4")), &["shard"]),
+        (
+            edited("variance.exr", "image", Some("variance of the mean")),
+            &["not a render's radiance"],
+        ),
+    ];
+    // a NaN pixel, a negative variance, only some variance channels
+    let mut px = img.pixels.clone();
+    px[5].y = f32::NAN;
+    let p = d.join("nan.exr");
+    write_exr(&p, 4, 4, &px, img.variance.as_deref(), &img.metadata).unwrap();
+    bad.push((p, &["pixel (1, 1) is not a finite"]));
+    let mut var = img.variance.clone().unwrap();
+    var[2].z = -1.0;
+    let p = d.join("negvar.exr");
+    write_exr(&p, 4, 4, &img.pixels, Some(&var), &img.metadata).unwrap();
+    bad.push((p, &["variance of pixel (2, 0)"]));
+    bad.push((partial_variance(d, &img), &["some of the channels"]));
+    bad.push((huge_header(d, &a), &["declares", "more than"]));
+
+    let b = small_exr(d, "b.exr", "1");
+    let m = d.join("m.exr");
+    let cb = common::cornell_path();
+    let cb = cb.to_str().unwrap();
+    for (p, expect) in &bad {
+        let p = p.to_str().unwrap();
+        let (bs, ms) = (b.to_str().unwrap(), m.to_str().unwrap());
+        assert_refused(
+            &vrpt(&["merge", p, bs, "-o", ms]),
+            &format!("merge {p}"),
+            expect,
+        );
+        assert_refused(
+            &vrpt(&["merge", bs, p, "-o", ms]),
+            &format!("merge 2 {p}"),
+            expect,
+        );
+        assert_refused(&vrpt(&["diff", p, bs]), &format!("diff {p}"), expect);
+        assert_refused(&vrpt(&["diff", bs, p]), &format!("diff ref {p}"), expect);
+        let common = [
+            "--reference",
+            p,
+            "--runs",
+            "2",
+            "--strategies",
+            "independent",
+            "-q",
+        ];
+        let mut c = vec!["compare", cb, "--spp", "1"];
+        c.extend(common);
+        assert_refused(&vrpt(&c), &format!("compare {p}"), expect);
+        let mut c = vec!["converge", cb, "--spp", "1,2"];
+        c.extend(common);
+        assert_refused(&vrpt(&c), &format!("converge {p}"), expect);
+        assert!(!m.exists());
+    }
+}
+
+/// An EXR with channels R, G, B and variance.R only.
+fn partial_variance(dir: &Path, img: &vrpt::image_io::RgbImage) -> PathBuf {
+    use exr::prelude::*;
+    let p = dir.join("partial.exr");
+    let px = img.pixels.clone();
+    let var = img.variance.clone().unwrap();
+    let size = Vec2(4, 4);
+    let channels = SpecificChannels::build()
+        .with_channel("B")
+        .with_channel("G")
+        .with_channel("R")
+        .with_channel("variance.R")
+        .with_pixel_fn(|pos: Vec2<usize>| {
+            let i = pos.y() * 4 + pos.x();
+            (px[i].z, px[i].y, px[i].x, var[i].x)
+        });
+    Image::from_channels(size, channels)
+        .write()
+        .to_file(&p)
+        .unwrap();
+    p
+}
+
+/// `a` with its header's data window widened to 100000 × 100000 pixels (a 2 KB file cannot hold
+/// them): refused from the header, before anything that size is allocated.
+fn huge_header(dir: &Path, a: &Path) -> PathBuf {
+    let mut bytes = std::fs::read(a).unwrap();
+    let key = b"dataWindow\0box2i\0";
+    let at = bytes
+        .windows(key.len())
+        .position(|w| w == key)
+        .expect("dataWindow attribute")
+        + key.len()
+        + 4; // the attribute's byte count
+             // box2i: xMin, yMin, xMax, yMax as little-endian i32
+    bytes[at + 8..at + 12].copy_from_slice(&99_999i32.to_le_bytes());
+    bytes[at + 12..at + 16].copy_from_slice(&99_999i32.to_le_bytes());
+    let p = dir.join("huge.exr");
+    std::fs::write(&p, bytes).unwrap();
+    p
+}

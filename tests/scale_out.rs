@@ -1,0 +1,298 @@
+//! Renders in pieces: shards (`--shard I/N`) that merge into the render of all their samples,
+//! renders cut into batches that do not change a pixel, and interrupted renders (SIGINT,
+//! SIGTERM) that keep the samples taken, while a second signal aborts without touching the
+//! output.
+
+mod common;
+
+use std::path::Path;
+use std::process::{Command, Output, Stdio};
+use std::sync::atomic::AtomicBool;
+use std::time::{Duration, Instant};
+use vrpt::image_io::read_exr;
+use vrpt::output::RenderMetadata;
+use vrpt::render::{render, render_passes, NoProgress, PassPlan, RenderSettings};
+use vrpt::sampler::SamplerKind;
+use vrpt::strategy::Strategy;
+
+fn vrpt(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_vrpt"))
+        .args(args)
+        .output()
+        .expect("run vrpt")
+}
+
+fn ok(out: Output) -> Output {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+/// The merge of shards equals the render of all the samples to f32 rounding. Both are f32
+/// roundings of the same per-pixel mean: the render rounds Σx/N once (relative error ≤ 2⁻²⁴);
+/// the merge rounds each shard's mean (≤ 2⁻²⁴ each), sums them weighted in f64 (non-negative
+/// terms: the relative error stays ≤ 2⁻²⁴) and rounds again (≤ 2⁻²⁴). So
+/// |merged − render| ≤ 3·2⁻²⁴·max(|merged|, |render|) plus f64 noise; the test allows 4·2⁻²⁴.
+/// The variance of the mean is recovered from f32 variances and means, `Σx² = v·n(n−1) + n·m²`,
+/// whose rounding (a few 2⁻²⁴ of Σx²) is then divided by N(N−1): a few 2⁻²⁴ of
+/// (m²/(N−1) + v); the test allows 16·2⁻²⁴ of that.
+#[test]
+fn merged_shards_equal_the_render_of_all_samples() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = common::cornell_path();
+    let scene = scene.to_str().unwrap();
+    let d = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    let base = [
+        "render", scene, "--width", "24", "--height", "16", "--spp", "26", "--seed", "5", "-q",
+    ];
+    let ulp = 2f32.powi(-24);
+    // one pass of 26 (shards split inside the stratified set) and passes of 8 (shards straddle
+    // passes, and the last pass is a set of 2)
+    for pass in [None, Some("8")] {
+        for sampler in ["stratified", "independent", "sobol"] {
+            let mut args: Vec<&str> = base.to_vec();
+            args.extend(["--sampler", sampler]);
+            if let Some(p) = pass {
+                args.extend(["--pass-spp", p]);
+            }
+            let whole = d("whole.exr");
+            let mut a = args.clone();
+            a.extend(["-o", &whole]);
+            ok(vrpt(&a));
+            let mut shards = Vec::new();
+            for i in 0..4 {
+                let out = d(&format!("shard{i}.exr"));
+                let shard = format!("{i}/4");
+                let mut a = args.clone();
+                a.extend(["--shard", &shard, "-o", &out]);
+                ok(vrpt(&a));
+                let img = read_exr(Path::new(&out)).unwrap();
+                let m = RenderMetadata::require(&img, Path::new(&out)).unwrap();
+                // shard i holds samples ⌊26i/4⌋ .. ⌊26(i+1)/4⌋
+                assert_eq!(m.shard, Some((i, 4)));
+                assert_eq!(m.first_sample, (26 * i / 4) as u64);
+                assert_eq!(m.spp, (26 * (i + 1) / 4 - 26 * i / 4) as u64);
+                assert_eq!(m.requested_spp, None);
+                shards.push(out);
+            }
+            let merged = d("merged.exr");
+            let mut a = vec!["merge"];
+            a.extend(shards.iter().map(String::as_str));
+            a.extend(["-o", &merged]);
+            ok(vrpt(&a));
+            let m = read_exr(Path::new(&merged)).unwrap();
+            let w = read_exr(Path::new(&whole)).unwrap();
+            let (mv, wv) = (m.variance.unwrap(), w.variance.unwrap());
+            for k in 0..w.pixels.len() {
+                for c in 0..3 {
+                    let (x, y) = (m.pixels[k][c], w.pixels[k][c]);
+                    assert!(
+                        (x - y).abs() <= 4.0 * ulp * x.abs().max(y.abs()),
+                        "{sampler} pass {pass:?}: pixel {k} channel {c}: merged {x}, render {y}"
+                    );
+                    let tol = 16.0 * ulp * (y * y / 25.0 + wv[k][c]);
+                    assert!(
+                        (mv[k][c] - wv[k][c]).abs() <= tol,
+                        "{sampler} pass {pass:?}: variance {k}/{c}: {} vs {}",
+                        mv[k][c],
+                        wv[k][c]
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn bad_shards_are_refused_with_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let exr = dir.path().join("x.exr");
+    let scene = common::cornell_path();
+    let scene = scene.to_str().unwrap();
+    for (shard, spp, expect) in [
+        ("4/4", "16", "not a shard"),
+        ("1/0", "16", "not a shard"),
+        ("a/4", "16", "not a shard"),
+        ("-1/4", "16", "not a shard"),
+        ("2", "16", "not a shard"),
+        ("0/8", "4", "holds no samples"),
+    ] {
+        let flag = format!("--shard={shard}");
+        let out = vrpt(&[
+            "render",
+            scene,
+            "--spp",
+            spp,
+            "--width",
+            "8",
+            "--height",
+            "8",
+            &flag,
+            "-o",
+            exr.to_str().unwrap(),
+        ]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "--shard {shard}: {stderr}");
+        assert_eq!(stderr.lines().count(), 1, "--shard {shard}: {stderr}");
+        assert!(stderr.contains(expect), "--shard {shard}: {stderr}");
+        assert!(!exr.exists());
+    }
+    // a shard with a time limit would not know its samples
+    let out = vrpt(&[
+        "render",
+        scene,
+        "--shard",
+        "0/2",
+        "--time-limit",
+        "1",
+        "-o",
+        "x.exr",
+    ]);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("cannot be used with"));
+}
+
+/// A render that can be stopped is cut into batches that go on from the pass's sums: the image
+/// is bit-identical to the render in one piece, for every sampler.
+#[test]
+fn batches_do_not_change_a_pixel() {
+    static NEVER: AtomicBool = AtomicBool::new(false);
+    let scene = common::shipped("cornell-box");
+    for sampler in [
+        SamplerKind::Stratified,
+        SamplerKind::Independent,
+        SamplerKind::Sobol,
+    ] {
+        let settings = RenderSettings {
+            width: 20,
+            height: 12,
+            spp: 37,
+            seed: common::seed(3),
+            strategy: Strategy {
+                sampler,
+                ..Strategy::default()
+            },
+            ..RenderSettings::default()
+        };
+        let (whole, _) = render(&scene, &settings, &NoProgress).unwrap();
+        let plan = PassPlan {
+            stop: Some(&NEVER),
+            ..PassPlan::default()
+        };
+        let r = render_passes(&scene, &settings, &plan, &NoProgress).unwrap();
+        assert_eq!((r.spp, r.first_sample, r.interrupted), (37, 0, false));
+        // batches of 1, 4, 16, then what fits in BATCH_SECONDS: at least three here
+        assert_eq!(r.film.mean_image(), whole.mean_image(), "{sampler}");
+        assert_eq!(r.film.variance_image(), whole.variance_image(), "{sampler}");
+    }
+}
+
+/// Start a long render in the background, wait until it has rendered for a while, and send it
+/// `signals` (one shell, `kill` builtins back to back).
+#[cfg(unix)]
+fn signalled_render(output: &Path, signals: &[&str]) -> Output {
+    let scene = common::cornell_path();
+    let child = Command::new(env!("CARGO_BIN_EXE_vrpt"))
+        .args([
+            "render",
+            scene.to_str().unwrap(),
+            "--width",
+            "48",
+            "--height",
+            "32",
+            "--spp",
+            "100000000",
+            "-q",
+            "-o",
+            output.to_str().unwrap(),
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start vrpt");
+    std::thread::sleep(Duration::from_millis(1500));
+    let kills: Vec<String> = signals
+        .iter()
+        .map(|s| format!("kill -{s} {}", child.id()))
+        .collect();
+    let st = Command::new("sh")
+        .args(["-c", &kills.join("; ")])
+        .status()
+        .unwrap();
+    assert!(st.success());
+    let t = Instant::now();
+    let out = child.wait_with_output().unwrap();
+    // the render stops within a batch (about 0.25 s) and a write
+    assert!(t.elapsed() < Duration::from_secs(30), "did not stop");
+    out
+}
+
+#[cfg(unix)]
+#[test]
+fn an_interrupted_render_writes_the_samples_taken() {
+    let dir = tempfile::tempdir().unwrap();
+    for signal in ["INT", "TERM"] {
+        let exr = dir.path().join(format!("{signal}.exr"));
+        let out = signalled_render(&exr, &[signal]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(130), "SIG{signal}: {stderr}");
+        assert!(stderr.contains("interrupted"), "{stderr}");
+        assert!(!stderr.contains("panicked"), "{stderr}");
+        let img = read_exr(&exr).unwrap();
+        let m = RenderMetadata::require(&img, &exr).unwrap();
+        assert!(m.interrupted, "SIG{signal}");
+        assert_eq!(m.requested_spp, Some(100_000_000));
+        assert!(m.spp >= 1 && m.spp < 100_000_000, "spp {}", m.spp);
+        assert!(img.pixels.iter().all(|p| p.is_finite()));
+        // the light is in view: the image holds rendered samples, not zeros
+        assert!(img.pixels.iter().any(|p| p.min_element() > 1.0));
+        // and it is a valid render: it merges with another seed's
+        let other = dir.path().join("other.exr");
+        ok(vrpt(&[
+            "render",
+            common::cornell_path().to_str().unwrap(),
+            "--width",
+            "48",
+            "--height",
+            "32",
+            "--spp",
+            "2",
+            "--seed",
+            "1",
+            "-q",
+            "-o",
+            other.to_str().unwrap(),
+        ]));
+        let merged = dir.path().join("merged.exr");
+        ok(vrpt(&[
+            "merge",
+            exr.to_str().unwrap(),
+            other.to_str().unwrap(),
+            "-o",
+            merged.to_str().unwrap(),
+        ]));
+    }
+}
+
+/// SIGTERM then SIGINT, back to back (two kinds, so the kernel cannot fold them into one): the
+/// first asks for a graceful stop, the second aborts at once, long before the current batch
+/// ends. The image that was there stays byte for byte, and no temporary file is left.
+#[cfg(unix)]
+#[test]
+fn a_second_signal_aborts_without_touching_the_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let exr = dir.path().join("kept.exr");
+    std::fs::write(&exr, b"the previous image").unwrap();
+    let out = signalled_render(&exr, &["TERM", "INT"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(130), "{stderr}");
+    assert!(stderr.contains("aborted"), "{stderr}");
+    assert_eq!(std::fs::read(&exr).unwrap(), b"the previous image");
+    let names: Vec<String> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(names, ["kept.exr"]);
+}
