@@ -214,6 +214,14 @@ fn camera_for(scene: &Scene, settings: &RenderSettings) -> Result<Camera> {
             "width, height, spp and max depth must be at least 1".into(),
         ));
     }
+    if settings.first_sample.checked_add(settings.spp).is_none() {
+        return Err(Error::Settings(format!(
+            "samples {} .. {} go beyond the last sample index, {}",
+            settings.first_sample,
+            settings.first_sample as u64 + settings.spp as u64,
+            u32::MAX
+        )));
+    }
     check_memory(settings.width, settings.height)?;
     Camera::new(&scene.camera, settings.width, settings.height).ok_or_else(|| {
         Error::Settings(format!(

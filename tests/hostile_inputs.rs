@@ -318,6 +318,29 @@ fn errors_quote_a_bounded_prefix() {
     );
 }
 
+/// Sample indices are 32-bit: a range past the last one is refused, not wrapped around.
+#[test]
+fn sample_ranges_past_the_last_index_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x.exr");
+    let cb = common::cornell_path();
+    assert_refused(
+        &vrpt(&[
+            "render",
+            cb.to_str().unwrap(),
+            "--first-sample",
+            "4294967295",
+            "--spp",
+            "10",
+            "-o",
+            out.to_str().unwrap(),
+        ]),
+        "first sample",
+        &["beyond the last sample index"],
+    );
+    assert!(!out.exists());
+}
+
 /// Render a 4×4 EXR and return its path.
 fn small_exr(dir: &Path, name: &str, seed: &str) -> PathBuf {
     let p = dir.join(name);

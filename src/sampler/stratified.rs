@@ -243,17 +243,19 @@ impl Sampler for StratifiedSampler {
         let sy = self.div_a.div(s);
         let sx = s - sy * a;
         // the sub-column (of b): a permutation of the row index, its own for each column, so a
-        // column holds every sub-column once; the sub-row (of a) likewise, its own for each row
-        let key = (dk >> 32) as u32;
+        // column holds every sub-column once; the sub-row (of a) likewise, its own for each row.
+        // Each permutation's key is hashed from (dimension key, column or row): keys that
+        // differed by xor-ed constants left Kensler's permutation of a few elements correlated
+        // between σ and τ, and some sub-cells were never sampled (a bias)
         let px = if b > 1 {
-            let k = key ^ sx.wrapping_mul(0x9e37_79b9);
-            permute_with(sy, &self.div_b, self.mask_b, k)
+            let k = mix64(dk ^ (sx as u64 + 1).wrapping_mul(0xd1b5_4a32_d192_ed03));
+            permute_with(sy, &self.div_b, self.mask_b, k as u32)
         } else {
             0
         };
         let py = if a > 1 {
-            let k = key ^ 0x68bc_21eb ^ sy.wrapping_mul(0x85eb_ca6b);
-            permute_with(sx, &self.div_a, self.mask_a, k)
+            let k = mix64(!dk ^ (sy as u64 + 1).wrapping_mul(0xaef1_7502_108e_f2d9));
+            permute_with(sx, &self.div_a, self.mask_a, k as u32)
         } else {
             0
         };
