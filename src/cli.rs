@@ -12,7 +12,10 @@ use vrpt::analysis::experiments::{
 };
 use vrpt::analysis::merge::{merge, MergeInput};
 use vrpt::analysis::metrics::{image_bias, mean_variance, metrics, region_metrics, Region};
-use vrpt::analysis::plots::{write_comparison_grid, write_convergence_plot, write_error_map};
+use vrpt::analysis::plots::{
+    convergence_svg, write_comparison_grid, write_convergence_plot, write_error_map,
+};
+use vrpt::analysis::report::{number, Column, Report, Table};
 use vrpt::bsdf::Directions;
 use vrpt::error::{Error, Result};
 use vrpt::image_io::{check_image_path, check_writable, read_exr, write_bytes, write_exr, Format};
@@ -259,6 +262,10 @@ pub struct DiffArgs {
     /// Write a false-colour map of the per-pixel relative squared error to this PNG.
     #[arg(long, value_name = "PNG")]
     pub error_map: Option<PathBuf>,
+    /// Write a self-contained HTML report to this file: both images as HDR data with exposure,
+    /// A/B slider, false-colour error views with their scale, pixel inspection and the metrics.
+    #[arg(long, value_name = "HTML")]
+    pub report: Option<PathBuf>,
     #[command(flatten)]
     pub regions: RegionArgs,
 }
@@ -291,6 +298,11 @@ pub struct ExperimentArgs {
     /// Write the results as JSON to this file.
     #[arg(long, value_name = "FILE")]
     pub json: Option<PathBuf>,
+    /// Write a self-contained HTML report to this file: the reference and each strategy's
+    /// first run as HDR images with exposure, A/B slider, false-colour error views with their
+    /// scale and pixel inspection, the sortable metrics, and the settings of the run.
+    #[arg(long, value_name = "HTML")]
+    pub report: Option<PathBuf>,
     /// No progress bar.
     #[arg(short, long)]
     pub quiet: bool,
@@ -576,6 +588,9 @@ fn run_diff(args: &DiffArgs) -> Result<()> {
     if let Some(p) = &args.error_map {
         check_image_path(p)?;
     }
+    if let Some(p) = &args.report {
+        check_writable(p)?;
+    }
     let regions = args.regions.resolve(a.width, a.height)?;
     let m = metrics(&a.pixels, &r.pixels);
     let mut t = format!("MSE                {:.6e}\n", m.mse);
@@ -609,6 +624,73 @@ fn run_diff(args: &DiffArgs) -> Result<()> {
         }
     }
     out(&t);
+    if let Some(p) = &args.report {
+        let row = |name: &str, m: &vrpt::analysis::metrics::Metrics| {
+            let mut o = serde_json::Map::new();
+            o.insert("region".into(), name.into());
+            o.insert("mse".into(), number(m.mse));
+            o.insert("rel_mse".into(), number(m.rel_mse));
+            o.insert("rmse".into(), number(m.rmse));
+            o.insert("mae".into(), number(m.mae));
+            o.insert("mean_signed_error".into(), number(m.mean_signed_error));
+            o
+        };
+        let mut rows = vec![row("whole image", &m)];
+        for reg in &regions {
+            rows.push(row(
+                &reg.name,
+                &region_metrics(&a.pixels, &r.pixels, a.width, reg),
+            ));
+        }
+        let table = Table {
+            title: "error against the reference".into(),
+            columns: vec![
+                Column::text("region", "region"),
+                Column::number("mse", "MSE"),
+                Column::number("rel_mse", "relMSE"),
+                Column::number("rmse", "RMSE"),
+                Column::number("mae", "MAE"),
+                Column::number("mean_signed_error", "mean signed error"),
+            ],
+            rows,
+            row_key: "region".into(),
+        };
+        let describe = |img: &vrpt::image_io::RgbImage, path: &Path| {
+            RenderMetadata::radiance(img, path)
+                .ok()
+                .flatten()
+                .map_or_else(
+                    || format!("{} (no vrpt metadata)", path.display()),
+                    |m| {
+                        format!(
+                            "{} ({} spp, {}, seed {}, scene hash {})",
+                            path.display(),
+                            m.spp,
+                            m.strategy,
+                            m.seed.map_or("merged".into(), |s| s.to_string()),
+                            m.scene_hash_hex()
+                        )
+                    },
+                )
+        };
+        let settings = vec![
+            ("image".into(), describe(&a, &args.image)),
+            ("reference".into(), describe(&r, &args.reference)),
+            ("size".into(), format!("{}x{}", a.width, a.height)),
+            ("vrpt".into(), env!("CARGO_PKG_VERSION").into()),
+        ];
+        let name = args
+            .image
+            .file_name()
+            .map_or("image".into(), |n| n.to_string_lossy().into_owned());
+        let title = format!(
+            "vrpt diff: {} against {}",
+            args.image.display(),
+            args.reference.display()
+        );
+        Report::for_diff(&name, &a, &r, table, &title, settings).write(p)?;
+        out(&format!("wrote {}\n", p.display()));
+    }
     if let Some(p) = &args.error_map {
         let (lo, hi) = write_error_map(p, &a, &r)?;
         out(&format!(
@@ -623,7 +705,7 @@ fn run_diff(args: &DiffArgs) -> Result<()> {
 fn experiment_setup(
     a: &ExperimentArgs,
 ) -> Result<(Scene, vrpt::image_io::RgbImage, ExperimentSettings)> {
-    for p in [&a.csv, &a.json].into_iter().flatten() {
+    for p in [&a.csv, &a.json, &a.report].into_iter().flatten() {
         check_writable(p)?;
     }
     let scene = scene::load(&a.scene)?;
@@ -660,6 +742,41 @@ fn report<R: serde::Serialize, J: serde::Serialize>(
     Ok(())
 }
 
+/// How an experiment was made, for its report: scene, scene hash, reference, size, (the caller
+/// inserts the spp or time at 4), runs, seeds, strategies, max depth, vrpt version.
+fn experiment_settings_list(
+    a: &ExperimentArgs,
+    scene: &Scene,
+    reference: &vrpt::image_io::RgbImage,
+    s: &ExperimentSettings,
+) -> Vec<(String, String)> {
+    let reference_meta = RenderMetadata::radiance(reference, &a.reference)
+        .ok()
+        .flatten()
+        .map_or_else(
+            || "no vrpt metadata".into(),
+            |m| format!("{} spp, {}", m.spp, m.strategy),
+        );
+    let strategies: Vec<String> = a.strategies.0.iter().map(|s| s.to_string()).collect();
+    vec![
+        ("scene".into(), a.scene.display().to_string()),
+        ("scene hash".into(), format!("{:016x}", scene.hash)),
+        (
+            "reference".into(),
+            format!("{} ({reference_meta})", a.reference.display()),
+        ),
+        ("size".into(), format!("{}x{}", s.width, s.height)),
+        ("runs".into(), a.runs.to_string()),
+        (
+            "seeds".into(),
+            format!("{}..{}", a.seed, a.seed + a.runs as u64 - 1),
+        ),
+        ("strategies".into(), strategies.join(", ")),
+        ("max depth".into(), s.max_depth.to_string()),
+        ("vrpt".into(), env!("CARGO_PKG_VERSION").into()),
+    ]
+}
+
 const EXPERIMENT_BAR: &str = "{spinner} [{elapsed_precise}] {bar:30} {percent}% ETA {eta} {msg}";
 
 fn run_compare(args: &CompareArgs) -> Result<()> {
@@ -688,6 +805,26 @@ fn run_compare(args: &CompareArgs) -> Result<()> {
     report(a, &c.table(), &c.rows, &c)?;
     if let Some(p) = &args.grid {
         write_comparison_grid(p, &c, &reference, args.exposure)?;
+    }
+    if let Some(p) = &a.report {
+        let budget = match args.equal_time {
+            Some(t) => (
+                "time per run".into(),
+                format!("{t} s (passes of {} spp)", args.spp),
+            ),
+            None => ("spp per run".into(), args.spp.to_string()),
+        };
+        let mut settings = experiment_settings_list(a, &scene, &reference, &s);
+        settings.insert(4, budget);
+        let names: Vec<String> = s.regions.iter().map(|r| r.name.clone()).collect();
+        let title = format!(
+            "vrpt compare: {}, {} ({} runs)",
+            a.scene.display(),
+            settings[4].1,
+            a.runs
+        );
+        Report::for_comparison(&c, &reference, &names, &title, settings)?.write(p)?;
+        out(&format!("wrote {}\n", p.display()));
     }
     Ok(())
 }
@@ -732,12 +869,22 @@ fn run_converge(args: &ConvergeArgs) -> Result<()> {
         .source
         .file_stem()
         .map_or("scene".into(), |s| s.to_string_lossy().into_owned());
+    let plot_title = format!("{name}: MSE against spp ({} runs each)", s.runs);
     for p in &args.plot {
-        write_convergence_plot(
-            p,
-            &c,
-            &format!("{name}: MSE against spp ({} runs each)", s.runs),
-        )?;
+        write_convergence_plot(p, &c, &plot_title)?;
+    }
+    if let Some(p) = &a.report {
+        let mut settings = experiment_settings_list(a, &scene, &reference, &s);
+        let spps: Vec<String> = args.spp.0.iter().map(u32::to_string).collect();
+        settings.insert(4, ("spp".into(), spps.join(", ")));
+        let title = format!(
+            "vrpt converge: {} ({} runs each)",
+            a.scene.display(),
+            a.runs
+        );
+        let svg = convergence_svg(&c, &plot_title)?;
+        Report::for_convergence(&c, &reference, &title, settings, svg)?.write(p)?;
+        out(&format!("wrote {}\n", p.display()));
     }
     Ok(())
 }

@@ -166,6 +166,9 @@ pub struct Comparison {
     pub baseline: String,
     #[serde(skip)]
     pub images: Vec<Vec<Vec3>>,
+    /// The per-pixel variance of the mean of each strategy's first run (for the report).
+    #[serde(skip)]
+    pub variances: Vec<Vec<Vec3>>,
     /// The reference's mean variance of the mean, if it records one: the floor under every MSE.
     pub reference_variance: Option<f64>,
 }
@@ -196,6 +199,7 @@ pub fn compare(
         let mut rows = Vec::new();
         let mut region_rows: Vec<RegionRow> = Vec::new();
         let mut images = Vec::new();
+        let mut variances = Vec::new();
         for st in strategies {
             let mut runs: Vec<Vec<Vec3>> = Vec::new();
             let (mut secs, mut spps, mut ms) = (Vec::new(), Vec::new(), Vec::<Metrics>::new());
@@ -215,6 +219,9 @@ pub fn compare(
                 let r = render_passes(scene, &settings, &plan, &NoProgress)?;
                 let (film, stats, reached) = (r.film, r.stats, r.spp);
                 let img = film.mean_image();
+                if k == 0 {
+                    variances.push(film.variance_image());
+                }
                 ms.push(metrics(&img, &reference.pixels));
                 for (r, m) in s.regions.iter().zip(&mut region_ms) {
                     m.push(region_metrics(&img, &reference.pixels, s.width, r));
@@ -273,6 +280,7 @@ pub fn compare(
             rows,
             regions: region_rows,
             images,
+            variances,
             reference_variance,
         })
     })?
@@ -323,6 +331,10 @@ pub struct ConvergePoint {
 pub struct Convergence {
     pub points: Vec<ConvergePoint>,
     pub slopes: Vec<ConvergeSlope>,
+    /// Per point (in the order of `points`), the first run's image and the per-pixel variance
+    /// of its mean (for the report).
+    #[serde(skip)]
+    pub images: Vec<(Vec<Vec3>, Vec<Vec3>)>,
 }
 
 /// The fitted convergence rates of one strategy.
@@ -352,6 +364,7 @@ pub fn converge(
         warm_up(scene, s)?;
         let mut points = Vec::new();
         let mut slopes = Vec::new();
+        let mut images = Vec::new();
         for st in strategies {
             let mut xs = Vec::new();
             let (mut ys, mut rs) = (Vec::new(), Vec::new());
@@ -361,7 +374,11 @@ pub fn converge(
                     let settings = run_settings(st, s, spp, k);
                     let r = render_passes(scene, &settings, &PassPlan::default(), &NoProgress)?;
                     let (film, stats) = (r.film, r.stats);
-                    let m = metrics(&film.mean_image(), &reference.pixels);
+                    let img = film.mean_image();
+                    let m = metrics(&img, &reference.pixels);
+                    if k == 0 {
+                        images.push((img, film.variance_image()));
+                    }
                     mse += m.mse;
                     rel += m.rel_mse;
                     secs += stats.elapsed.as_secs_f64();
@@ -388,7 +405,11 @@ pub fn converge(
                 rel_mse_slope: log_log_slope(&xs, &rs),
             });
         }
-        Ok(Convergence { points, slopes })
+        Ok(Convergence {
+            points,
+            slopes,
+            images,
+        })
     })?
 }
 

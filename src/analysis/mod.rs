@@ -6,10 +6,12 @@
 //!   `converge` (error against spp, each spp rendered from scratch, with fitted slopes);
 //! - [`merge`]: renders made in pieces combined exactly into one reference;
 //! - [`fit`]: least-squares lines and log-log slopes;
-//! - [`plots`]: log-log convergence plots (SVG/PNG) and labelled image grids (PNG).
+//! - [`plots`]: log-log convergence plots (SVG/PNG) and labelled image grids (PNG);
+//! - [`report`]: the self-contained HTML report of compare, converge and diff.
 
 pub mod experiments;
 pub mod fit;
 pub mod merge;
 pub mod metrics;
 pub mod plots;
+pub mod report;

@@ -1,13 +1,13 @@
 //! Pictures of experiments: a log-log convergence plot (SVG or PNG, by extension) with one line
-//! per strategy and its fitted slope in the legend, and a labelled PNG grid of images and their
-//! false-colour error maps. Drawn with plotters; text uses the Hack font shipped as bytes by
+//! per strategy and its fitted slope in the legend; a labelled PNG grid of images, the reference
+//! in the first column, over their false-colour error maps; error maps with their colour bar and
+//! its numeric range. Drawn with plotters; text uses the Hack font shipped as bytes by
 //! `epaint_default_fonts` (no system fonts needed), registered as "sans-serif".
 
 use crate::analysis::experiments::{Comparison, Convergence};
-use crate::analysis::metrics::{false_colour, relative_error_map};
+use crate::analysis::metrics::{colormap, false_colour, relative_error_map};
 use crate::error::{Error, Result};
 use crate::image_io::{tonemap, write_bytes, write_png_rgb8, Format, RgbImage};
-use glam::Vec3;
 use plotters::prelude::*;
 use std::path::Path;
 use std::sync::Once;
@@ -106,6 +106,19 @@ fn draw_convergence<DB: DrawingBackend>(
     root.present().map_err(e)
 }
 
+/// The log-log plot of MSE against spp as SVG text (for the HTML report).
+pub fn convergence_svg(c: &Convergence, title: &str) -> Result<String> {
+    register_font();
+    let mut svg = String::new();
+    draw_convergence(
+        SVGBackend::with_string(&mut svg, (900, 600)).into_drawing_area(),
+        c,
+        title,
+    )
+    .map_err(|m| Error::Settings(format!("convergence plot: {m}")))?;
+    Ok(svg)
+}
+
 /// Write the log-log plot of MSE against spp to `path` (.svg or .png).
 pub fn write_convergence_plot(path: &Path, c: &Convergence, title: &str) -> Result<()> {
     register_font();
@@ -136,17 +149,108 @@ pub fn write_convergence_plot(path: &Path, c: &Convergence, title: &str) -> Resu
 }
 
 /// Write the false-colour map of `image`'s per-pixel relative squared error against
-/// `reference` (same size) as a PNG; returns the range of its log colour scale.
+/// `reference` (same size) as a PNG, with its colour bar and the bar's numeric range below it;
+/// returns the range of the log colour scale.
 pub fn write_error_map(path: &Path, image: &RgbImage, reference: &RgbImage) -> Result<(f64, f64)> {
     let map = relative_error_map(&image.pixels, &reference.pixels);
     let (lo, hi) = error_scale(&[&map]);
-    let rgb: Vec<u8> = false_colour(&map, lo, hi).into_iter().flatten().collect();
-    write_png_rgb8(path, image.width, image.height, &rgb)?;
+    let colours = false_colour(&map, lo, hi);
+    let (w, h) = (image.width, image.height);
+    let scale = (256 / w.max(h)).max(1);
+    let mut c = Canvas::new((w * scale).max(420), h * scale + BAR_H);
+    c.blit(0, 0, w, h, scale, &|k| colours[k]);
+    c.colour_bar(0, h * scale, lo, hi, ERROR_TITLE)?;
+    c.write(path)?;
     Ok((lo, hi))
 }
 
-/// Write a comparison's grid: per strategy its first run's image (tone-mapped with
-/// `exposure`) and error map against `reference`.
+/// What the error maps show.
+const ERROR_TITLE: &str = "relative squared error (x−r)²/(r²+0.01), log scale";
+
+/// Height of a colour bar with its labels.
+const BAR_H: u32 = 48;
+
+/// An RGB8 image being drawn: pixels blitted, colour bars and text.
+struct Canvas {
+    w: u32,
+    h: u32,
+    buf: Vec<u8>,
+}
+
+impl Canvas {
+    fn new(w: u32, h: u32) -> Canvas {
+        Canvas {
+            w,
+            h,
+            buf: vec![255u8; (w * h * 3) as usize],
+        }
+    }
+
+    /// Draw a `width × height` image at (x0, y0), each pixel `scale`² screen pixels.
+    fn blit(
+        &mut self,
+        x0: u32,
+        y0: u32,
+        width: u32,
+        height: u32,
+        scale: u32,
+        px: &dyn Fn(usize) -> [u8; 3],
+    ) {
+        for y in 0..height * scale {
+            for x in 0..width * scale {
+                let src = ((y / scale) * width + x / scale) as usize;
+                let dst = (((y0 + y) * self.w + x0 + x) * 3) as usize;
+                self.buf[dst..dst + 3].copy_from_slice(&px(src));
+            }
+        }
+    }
+
+    /// Write `lines` of text, the first at (x, y), 16 pixels apart.
+    fn text(&mut self, lines: &[(String, u32, u32)]) -> Result<()> {
+        register_font();
+        let root = BitMapBackend::with_buffer(&mut self.buf, (self.w, self.h)).into_drawing_area();
+        let style = (FONT, 14).into_font().color(&BLACK);
+        for (s, x, y) in lines {
+            root.draw(&Text::new(s.clone(), (*x as i32, *y as i32), style.clone()))
+                .map_err(|e| Error::Settings(format!("drawing text: {e}")))?;
+        }
+        root.present()
+            .map_err(|e| Error::Settings(format!("drawing text: {e}")))
+    }
+
+    /// A colour bar across the canvas at height `y0`: the map from `lo` (left) to `hi` (right)
+    /// on a log scale, its two ends and its middle labelled with their values, and a title.
+    fn colour_bar(&mut self, x0: u32, y0: u32, lo: f64, hi: f64, title: &str) -> Result<()> {
+        let (bx, bw) = (x0 + 8, self.w - x0 - 16);
+        for x in 0..bw {
+            let c = colormap(x as f64 / (bw - 1).max(1) as f64);
+            for y in y0 + 4..y0 + 16 {
+                let dst = ((y * self.w + bx + x) * 3) as usize;
+                self.buf[dst..dst + 3].copy_from_slice(&c);
+            }
+        }
+        let mid = (lo.max(1e-30).log10() + hi.max(lo * 10.0).log10()) / 2.0;
+        let right = format!("{:.1e}", hi.max(lo * 10.0));
+        self.text(&[
+            (format!("{lo:.1e}"), bx, y0 + 18),
+            (
+                format!("{:.1e}", 10f64.powf(mid)),
+                bx + bw / 2 - 24,
+                y0 + 18,
+            ),
+            (right.clone(), bx + bw - 8 * right.len() as u32, y0 + 18),
+            (title.to_string(), bx, y0 + 33),
+        ])
+    }
+
+    fn write(self, path: &Path) -> Result<()> {
+        write_png_rgb8(path, self.w, self.h, &self.buf)
+    }
+}
+
+/// Write a comparison's grid as a PNG: one column per image, the reference first; the top row
+/// holds the images (tone-mapped with `exposure`), the bottom row each strategy's error map
+/// against the reference on one shared log scale, whose colour bar and range run below.
 pub fn write_comparison_grid(
     path: &Path,
     c: &Comparison,
@@ -158,36 +262,43 @@ pub fn write_comparison_grid(
         .iter()
         .map(|img| relative_error_map(img, &reference.pixels))
         .collect();
-    let rows: Vec<GridRow> = c
-        .rows
-        .iter()
-        .zip(&c.images)
-        .zip(&maps)
-        .map(|((r, img), m)| GridRow {
-            label: format!("{}  {:.0} spp  MSE {:.2e}", r.strategy, r.spp, r.mse),
-            image: img,
-            error: m,
-        })
-        .collect();
-    write_image_grid(
-        path,
-        reference.width,
-        reference.height,
-        &rows,
-        exposure,
-        "rel. error² (log)",
-    )
-}
-
-/// One row of an image grid: a label, an image and its per-pixel error map.
-pub struct GridRow<'a> {
-    pub label: String,
-    pub image: &'a [Vec3],
-    pub error: &'a [f64],
+    let (lo, hi) = error_scale(&maps.iter().map(Vec::as_slice).collect::<Vec<_>>());
+    let (w, h) = (reference.width, reference.height);
+    let scale = (256 / w.max(h)).max(1);
+    let (cw, ch, pad, label_h) = (w * scale, h * scale, 8u32, 40u32);
+    let columns = 1 + c.rows.len() as u32;
+    let gw = (pad + columns * (cw + pad)).max(480);
+    let gh = label_h + ch + pad + ch + pad + BAR_H;
+    let mut g = Canvas::new(gw, gh);
+    let x_of = |col: u32| pad + col * (cw + pad);
+    g.blit(x_of(0), label_h, w, h, scale, &|k| {
+        tonemap(reference.pixels[k], exposure)
+    });
+    let mut labels = vec![("reference".to_string(), x_of(0), 4)];
+    if let Ok(Some(m)) = crate::output::RenderMetadata::radiance(reference, Path::new("reference"))
+    {
+        labels.push((format!("{} spp", m.spp), x_of(0), 20));
+    }
+    labels.push((
+        "error maps →".to_string(),
+        x_of(0),
+        label_h + ch + pad + ch / 2,
+    ));
+    for (i, ((row, img), map)) in c.rows.iter().zip(&c.images).zip(&maps).enumerate() {
+        let x0 = x_of(i as u32 + 1);
+        g.blit(x0, label_h, w, h, scale, &|k| tonemap(img[k], exposure));
+        let colours = false_colour(map, lo, hi);
+        g.blit(x0, label_h + ch + pad, w, h, scale, &|k| colours[k]);
+        labels.push((row.strategy.clone(), x0, 4));
+        labels.push((format!("{:.0} spp  MSE {:.2e}", row.spp, row.mse), x0, 20));
+    }
+    g.text(&labels)?;
+    g.colour_bar(0, label_h + 2 * (ch + pad), lo, hi, ERROR_TITLE)?;
+    g.write(path)
 }
 
 /// The range `[lo, hi]` an error-map colour scale spans: the 1st to 99.9th percentile of the
-/// positive errors of all rows, so every row shares one scale.
+/// positive errors of all maps, so every map shares one scale.
 pub fn error_scale(maps: &[&[f64]]) -> (f64, f64) {
     let mut v: Vec<f64> = maps
         .iter()
@@ -201,66 +312,4 @@ pub fn error_scale(maps: &[&[f64]]) -> (f64, f64) {
     let q = |f: f64| v[((v.len() - 1) as f64 * f) as usize];
     let (lo, hi) = (q(0.01), q(0.999));
     (lo, hi.max(lo * 10.0))
-}
-
-/// Write a PNG grid: one row per strategy holding its image (tone-mapped with `exposure`) and
-/// its error map (log scale shared by all rows), labelled.
-pub fn write_image_grid(
-    path: &Path,
-    width: u32,
-    height: u32,
-    rows: &[GridRow],
-    exposure: f32,
-    error_title: &str,
-) -> Result<()> {
-    register_font();
-    let scale = (256 / width.max(height)).max(1);
-    let (cw, ch) = (width * scale, height * scale);
-    let (pad, label_h, header_h) = (8u32, 22u32, 26u32);
-    let gw = pad + 2 * (cw + pad);
-    let gh = header_h + rows.len() as u32 * (label_h + ch + pad);
-    let mut buf = vec![255u8; (gw * gh * 3) as usize];
-    let (lo, hi) = error_scale(&rows.iter().map(|r| r.error).collect::<Vec<_>>());
-    let mut blit = |x0: u32, y0: u32, px: &dyn Fn(usize) -> [u8; 3]| {
-        for y in 0..ch {
-            for x in 0..cw {
-                let src = ((y / scale) * width + x / scale) as usize;
-                let dst = (((y0 + y) * gw + x0 + x) * 3) as usize;
-                buf[dst..dst + 3].copy_from_slice(&px(src));
-            }
-        }
-    };
-    for (i, r) in rows.iter().enumerate() {
-        let y0 = header_h + i as u32 * (label_h + ch + pad) + label_h;
-        let colours = false_colour(r.error, lo, hi);
-        blit(pad, y0, &|k| tonemap(r.image[k], exposure));
-        blit(2 * pad + cw, y0, &|k| colours[k]);
-    }
-    {
-        let root = BitMapBackend::with_buffer(&mut buf, (gw, gh)).into_drawing_area();
-        let style = (FONT, 15).into_font().color(&BLACK);
-        let text = |s: &str, x: u32, y: u32| {
-            root.draw(&Text::new(
-                s.to_string(),
-                (x as i32, y as i32),
-                style.clone(),
-            ))
-            .map_err(|e| draw_err(path, e))
-        };
-        text("image", pad, 6)?;
-        text(
-            &format!("{error_title} {lo:.0e}..{hi:.0e}"),
-            2 * pad + cw,
-            6,
-        )?;
-        for (i, r) in rows.iter().enumerate() {
-            text(
-                &r.label,
-                pad,
-                header_h + i as u32 * (label_h + ch + pad) + 3,
-            )?;
-        }
-        root.present().map_err(|e| draw_err(path, e))?;
-    }
-    write_png_rgb8(path, gw, gh, &buf)
 }

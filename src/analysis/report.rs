@@ -1,0 +1,467 @@
+//! The HTML report of `compare`, `converge` and `diff` (`--report`): one self-contained page
+//! (no network, no server) holding the reference and the renders as HDR data, tone-mapped in
+//! the page with an exposure control, false-colour error views with their colour bar, an A/B
+//! slider, pixel inspection, the sortable metrics tables, the settings that made the run, and
+//! for `converge` the log-log plot.
+//!
+//! The page is the static template `report.html`; this module fills its one data tag with a
+//! JSON payload:
+//! - `images[]`: `{name, group, reference, rgb, stderr}`, where `rgb` and `stderr` (the
+//!   per-pixel standard error of the mean, `√(variance of the mean)`, or null) are base64 of
+//!   little-endian IEEE binary16 values, RGB interleaved, rows top to bottom: half floats keep
+//!   3 significant digits of HDR values at 6 bytes a pixel;
+//! - `tables[]`: `{title, columns[{key, label, numeric}], rows[{key: value}], row_key}`, numbers
+//!   exact (the page shows 4 significant digits and keeps the exact value in `data-value`);
+//! - `settings`: `[[key, value]]`, how the report was made; `plot_svg`: the convergence plot.
+//!
+//! The payload holds no time or random identifier: the same data give the same file. Inside the
+//! `<script>` tag, `</` is written `<\/` (the same string to JSON) so no value can close it.
+
+use crate::analysis::experiments::{Comparison, Convergence, RegionRow};
+use crate::error::{Error, Result};
+use crate::image_io::{write_bytes, RgbImage};
+use base64::Engine as _;
+use glam::Vec3;
+use serde::Serialize;
+use std::path::Path;
+
+/// The page, with the data tag [`DATA_TAG`] that the payload replaces.
+const TEMPLATE: &str = include_str!("report.html");
+/// The template's empty data tag.
+const DATA_TAG: &str = r#"<script type="application/json" id="vrpt-data">{}</script>"#;
+
+/// One image of the report.
+#[derive(Clone, Debug)]
+pub struct ReportImage {
+    pub name: String,
+    /// For `converge`: the spp the image belongs to ("16 spp"); empty otherwise.
+    pub group: String,
+    pub reference: bool,
+    pub rgb: Vec<Vec3>,
+    /// Per-pixel variance of the mean (the page shows its square root, the standard error).
+    pub variance: Option<Vec<Vec3>>,
+}
+
+/// A column of a metrics table.
+#[derive(Clone, Debug, Serialize)]
+pub struct Column {
+    pub key: String,
+    pub label: String,
+    pub numeric: bool,
+}
+
+impl Column {
+    /// A column of numbers.
+    pub fn number(key: &str, label: &str) -> Column {
+        Column {
+            key: key.into(),
+            label: label.into(),
+            numeric: true,
+        }
+    }
+
+    /// A column of text.
+    pub fn text(key: &str, label: &str) -> Column {
+        Column {
+            key: key.into(),
+            label: label.into(),
+            numeric: false,
+        }
+    }
+}
+
+/// A metrics table: rows are JSON objects keyed by the columns' keys.
+#[derive(Clone, Debug, Serialize)]
+pub struct Table {
+    pub title: String,
+    pub columns: Vec<Column>,
+    pub rows: Vec<serde_json::Map<String, serde_json::Value>>,
+    /// The column whose value names a row (unique within the table).
+    pub row_key: String,
+}
+
+impl Table {
+    /// A table of serializable rows (their fields named by the columns' keys; a NaN or
+    /// infinite number becomes null, shown as "—").
+    pub fn of<T: Serialize>(
+        title: &str,
+        columns: Vec<Column>,
+        rows: &[T],
+        row_key: &str,
+    ) -> Result<Table> {
+        let rows = rows
+            .iter()
+            .map(|r| match serde_json::to_value(r) {
+                Ok(serde_json::Value::Object(m)) => Ok(m),
+                _ => Err(Error::Settings("a report row is not an object".into())),
+            })
+            .collect::<Result<_>>()?;
+        Ok(Table {
+            title: title.into(),
+            columns,
+            rows,
+            row_key: row_key.into(),
+        })
+    }
+}
+
+/// Everything a report shows.
+#[derive(Clone, Debug)]
+pub struct Report {
+    /// "compare", "converge" or "diff".
+    pub kind: String,
+    pub title: String,
+    pub settings: Vec<(String, String)>,
+    pub width: u32,
+    pub height: u32,
+    pub images: Vec<ReportImage>,
+    pub tables: Vec<Table>,
+    pub plot_svg: Option<String>,
+}
+
+#[derive(Serialize)]
+struct ImagePayload<'a> {
+    name: &'a str,
+    group: &'a str,
+    reference: bool,
+    rgb: String,
+    stderr: Option<String>,
+}
+
+#[derive(Serialize)]
+struct Payload<'a> {
+    kind: &'a str,
+    title: &'a str,
+    settings: &'a [(String, String)],
+    width: u32,
+    height: u32,
+    images: Vec<ImagePayload<'a>>,
+    tables: &'a [Table],
+    plot_svg: Option<&'a str>,
+}
+
+/// Base64 of the values as little-endian binary16, RGB interleaved.
+pub fn half_base64(values: impl Iterator<Item = Vec3>) -> String {
+    let mut bytes = Vec::new();
+    for v in values {
+        for c in v.to_array() {
+            bytes.extend_from_slice(&half::f16::from_f32(c).to_le_bytes());
+        }
+    }
+    base64::engine::general_purpose::STANDARD.encode(bytes)
+}
+
+impl Report {
+    /// The page.
+    pub fn to_html(&self) -> Result<String> {
+        let n = (self.width * self.height) as usize;
+        if let Some(i) = self
+            .images
+            .iter()
+            .find(|i| i.rgb.len() != n || i.variance.as_ref().is_some_and(|v| v.len() != n))
+        {
+            return Err(Error::Settings(format!(
+                "report: image '{}' is not {}x{}",
+                i.name, self.width, self.height
+            )));
+        }
+        let payload = Payload {
+            kind: &self.kind,
+            title: &self.title,
+            settings: &self.settings,
+            width: self.width,
+            height: self.height,
+            images: self
+                .images
+                .iter()
+                .map(|i| ImagePayload {
+                    name: &i.name,
+                    group: &i.group,
+                    reference: i.reference,
+                    rgb: half_base64(i.rgb.iter().copied()),
+                    stderr: i
+                        .variance
+                        .as_ref()
+                        .map(|v| half_base64(v.iter().map(|x| x.max(Vec3::ZERO).powf(0.5)))),
+                })
+                .collect(),
+            tables: &self.tables,
+            plot_svg: self.plot_svg.as_deref(),
+        };
+        let json = serde_json::to_string(&payload)
+            .map_err(|e| Error::Settings(format!("report: {e}")))?
+            .replace("</", "<\\/");
+        let tag = format!(r#"<script type="application/json" id="vrpt-data">{json}</script>"#);
+        match TEMPLATE.split_once(DATA_TAG) {
+            Some((head, tail)) => Ok(format!("{head}{tag}{tail}")),
+            None => Err(Error::Settings("report template lacks its data tag".into())),
+        }
+    }
+
+    /// Write the page to `path` (through a temporary file).
+    pub fn write(&self, path: &Path) -> Result<()> {
+        write_bytes(path, self.to_html()?.as_bytes())
+    }
+}
+
+/// The columns of a comparison's rows ([`CompareRow`]), as `--json` names them.
+fn compare_columns() -> Vec<Column> {
+    vec![
+        Column::text("strategy", "strategy"),
+        Column::number("spp", "spp"),
+        Column::number("seconds", "time (s)"),
+        Column::number("mse", "MSE"),
+        Column::number("rel_mse", "relMSE"),
+        Column::number("rmse", "RMSE"),
+        Column::number("mae", "MAE"),
+        Column::number("variance", "variance"),
+        Column::number("bias_t", "bias t"),
+        Column::number("bias_p", "bias p"),
+        Column::number("mse_reduction", "MSE reduction"),
+        Column::number("efficiency", "efficiency"),
+    ]
+}
+
+impl Report {
+    /// The report of `vrpt compare`: the reference and each strategy's first run, the metrics
+    /// (whole image, then one table per region), and `settings`.
+    pub fn for_comparison(
+        c: &Comparison,
+        reference: &RgbImage,
+        region_names: &[String],
+        title: &str,
+        settings: Vec<(String, String)>,
+    ) -> Result<Report> {
+        let mut images = vec![ReportImage {
+            name: "reference".into(),
+            group: String::new(),
+            reference: true,
+            rgb: reference.pixels.clone(),
+            variance: reference.variance.clone(),
+        }];
+        for ((row, img), var) in c.rows.iter().zip(&c.images).zip(&c.variances) {
+            images.push(ReportImage {
+                name: row.strategy.clone(),
+                group: String::new(),
+                reference: false,
+                rgb: img.clone(),
+                variance: Some(var.clone()),
+            });
+        }
+        let mut tables = vec![Table::of(
+            &format!(
+                "whole image (MSE reduction and efficiency against {})",
+                c.baseline
+            ),
+            compare_columns(),
+            &c.rows,
+            "strategy",
+        )?];
+        for name in region_names {
+            let rows: Vec<&RegionRow> = c.regions.iter().filter(|r| &r.region == name).collect();
+            tables.push(Table::of(
+                &format!("region {name}"),
+                vec![
+                    Column::text("strategy", "strategy"),
+                    Column::number("mse", "MSE"),
+                    Column::number("rel_mse", "relMSE"),
+                    Column::number("rmse", "RMSE"),
+                    Column::number("mae", "MAE"),
+                    Column::number("mse_reduction", "MSE reduction"),
+                ],
+                &rows,
+                "strategy",
+            )?);
+        }
+        Ok(Report {
+            kind: "compare".into(),
+            title: title.into(),
+            settings,
+            width: reference.width,
+            height: reference.height,
+            images,
+            tables,
+            plot_svg: None,
+        })
+    }
+
+    /// The report of `vrpt converge`: the reference, each strategy's first run at each spp (one
+    /// group per spp), the MSE and relMSE by spp, the fitted slopes and the plot.
+    pub fn for_convergence(
+        c: &Convergence,
+        reference: &RgbImage,
+        title: &str,
+        settings: Vec<(String, String)>,
+        plot_svg: String,
+    ) -> Result<Report> {
+        let mut images = vec![ReportImage {
+            name: "reference".into(),
+            group: String::new(),
+            reference: true,
+            rgb: reference.pixels.clone(),
+            variance: reference.variance.clone(),
+        }];
+        let mut spps: Vec<u32> = c.points.iter().map(|p| p.spp).collect();
+        spps.sort_unstable();
+        spps.dedup();
+        // groups in spp order, strategies in the run's order within each
+        for &spp in &spps {
+            for (p, (img, var)) in c.points.iter().zip(&c.images) {
+                if p.spp == spp {
+                    images.push(ReportImage {
+                        name: p.strategy.clone(),
+                        group: format!("{spp} spp"),
+                        reference: false,
+                        rgb: img.clone(),
+                        variance: Some(var.clone()),
+                    });
+                }
+            }
+        }
+        let by_spp = |key: &str, label: &str| -> Result<Table> {
+            let mut columns = vec![Column::text("strategy", "strategy")];
+            columns.extend(
+                spps.iter()
+                    .map(|n| Column::number(&format!("{key}_{n}"), &format!("{label} {n} spp"))),
+            );
+            let rows: Vec<serde_json::Map<String, serde_json::Value>> = c
+                .slopes
+                .iter()
+                .map(|s| {
+                    let mut m = serde_json::Map::new();
+                    m.insert("strategy".into(), s.strategy.clone().into());
+                    for p in c.points.iter().filter(|p| p.strategy == s.strategy) {
+                        let v = if key == "mse" { p.mse } else { p.rel_mse };
+                        m.insert(format!("{key}_{}", p.spp), number(v));
+                    }
+                    m
+                })
+                .collect();
+            Ok(Table {
+                title: format!("{label} by spp (mean over runs)"),
+                columns,
+                rows,
+                row_key: "strategy".into(),
+            })
+        };
+        let tables = vec![
+            Table::of(
+                "fitted log-log slopes (theory: −1 for independent samples)",
+                vec![
+                    Column::text("strategy", "strategy"),
+                    Column::number("mse_slope", "MSE slope"),
+                    Column::number("rel_mse_slope", "relMSE slope"),
+                ],
+                &c.slopes,
+                "strategy",
+            )?,
+            by_spp("mse", "MSE")?,
+            by_spp("rel_mse", "relMSE")?,
+        ];
+        Ok(Report {
+            kind: "converge".into(),
+            title: title.into(),
+            settings,
+            width: reference.width,
+            height: reference.height,
+            images,
+            tables,
+            plot_svg: Some(plot_svg),
+        })
+    }
+
+    /// The report of `vrpt diff`: the image and the reference, and `rows` of metrics (the
+    /// whole image, then each region) keyed by "region".
+    pub fn for_diff(
+        image_name: &str,
+        image: &RgbImage,
+        reference: &RgbImage,
+        rows: Table,
+        title: &str,
+        settings: Vec<(String, String)>,
+    ) -> Report {
+        Report {
+            kind: "diff".into(),
+            title: title.into(),
+            settings,
+            width: reference.width,
+            height: reference.height,
+            images: vec![
+                ReportImage {
+                    name: "reference".into(),
+                    group: String::new(),
+                    reference: true,
+                    rgb: reference.pixels.clone(),
+                    variance: reference.variance.clone(),
+                },
+                ReportImage {
+                    name: image_name.into(),
+                    group: String::new(),
+                    reference: false,
+                    rgb: image.pixels.clone(),
+                    variance: image.variance.clone(),
+                },
+            ],
+            tables: vec![rows],
+            plot_svg: None,
+        }
+    }
+}
+
+/// A finite number as JSON, anything else as null (shown as "—").
+pub fn number(x: f64) -> serde_json::Value {
+    serde_json::Number::from_f64(x).map_or(serde_json::Value::Null, serde_json::Value::Number)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn half_floats_round_trip_within_their_precision() {
+        let v = [Vec3::new(0.0, 1.0, -2.5), Vec3::new(1e-3, 65504.0, 0.333)];
+        let b = base64::engine::general_purpose::STANDARD
+            .decode(half_base64(v.iter().copied()))
+            .unwrap();
+        assert_eq!(b.len(), 12);
+        let back: Vec<f32> = b
+            .chunks(2)
+            .map(|c| half::f16::from_le_bytes([c[0], c[1]]).to_f32())
+            .collect();
+        for (x, y) in v.iter().flat_map(|p| p.to_array()).zip(back) {
+            assert!((x - y).abs() <= x.abs() * 2f32.powi(-11), "{x} {y}");
+        }
+    }
+
+    #[test]
+    fn the_payload_cannot_close_its_script_tag_and_the_page_is_deterministic() {
+        let r = Report {
+            kind: "diff".into(),
+            title: "a </script><script>alert(1)</script> title".into(),
+            settings: vec![("scene".into(), "x".into())],
+            width: 1,
+            height: 1,
+            images: vec![ReportImage {
+                name: "reference".into(),
+                group: String::new(),
+                reference: true,
+                rgb: vec![Vec3::ONE],
+                variance: None,
+            }],
+            tables: vec![],
+            plot_svg: None,
+        };
+        let html = r.to_html().unwrap();
+        assert_eq!(
+            html.matches("</script>").count(),
+            TEMPLATE.matches("</script>").count()
+        );
+        assert!(html.contains(r#"a <\/script><script>alert(1)<\/script> title"#));
+        assert_eq!(html, r.to_html().unwrap());
+        let bad = Report {
+            width: 2,
+            ..r.clone()
+        };
+        assert!(bad.to_html().is_err());
+    }
+}
