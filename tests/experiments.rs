@@ -361,7 +361,19 @@ fn merge_and_diff_from_the_command_line() {
         out.contains("MSE") && out.contains("relMSE") && out.contains("bias z"),
         "{out}"
     );
-    assert_eq!(image::open(p("err.png")).unwrap().width(), 8);
+    // the 8x8 map drawn at 32x (256 px), at least 420 px wide for the colour bar's labels,
+    // and the bar (48 px) below it
+    let map = image::open(p("err.png")).unwrap().to_rgb8();
+    assert_eq!(map.dimensions(), (420, 8 * 32 + 48));
+    // each image pixel is one flat 32x32 block of its false colour
+    for (x, y) in [(0, 0), (3, 5), (7, 7)] {
+        let c = map.get_pixel(32 * x, 32 * y);
+        assert_eq!(
+            map.get_pixel(32 * x + 31, 32 * y + 31),
+            c,
+            "block ({x},{y})"
+        );
+    }
     // metrics per region: a named one and a file of two, each reported on its own line
     std::fs::write(
         p("regions.txt"),
