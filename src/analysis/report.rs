@@ -7,9 +7,13 @@
 //! The page is the static template `report.html`; this module fills its one data tag with a
 //! JSON payload:
 //! - `images[]`: `{name, group, reference, rgb, stderr}`, where `rgb` and `stderr` (the
-//!   per-pixel standard error of the mean, `√(variance of the mean)`, or null) are base64 of
-//!   little-endian IEEE binary16 values, RGB interleaved, rows top to bottom: half floats keep
-//!   3 significant digits of HDR values at 6 bytes a pixel;
+//!   per-pixel standard error of the mean, `√(variance of the mean)`, or null) are IEEE
+//!   binary16 values, RGB interleaved, rows top to bottom (half floats keep 3 significant digits
+//!   of HDR values at 6 bytes a pixel), stored as [`encode_halves`] says: the values'
+//!   little-endian bytes split into two planes (all low bytes, then all high bytes: the high
+//!   bytes, sign and exponent, repeat and compress well), zlib-compressed, base64. The page
+//!   inflates them with the browser's own `DecompressionStream('deflate')`. The six presets on
+//!   the 256×256 Cornell box: 2.7 MB instead of 7.4 MB for plain base64;
 //! - `tables[]`: `{title, columns[{key, label, numeric}], rows[{key: value}], row_key}`, numbers
 //!   exact (the page shows 4 significant digits and keeps the exact value in `data-value`);
 //! - `settings`: `[[key, value]]`, how the report was made; `plot_svg`: the convergence plot.
@@ -23,6 +27,7 @@ use crate::image_io::{write_bytes, RgbImage};
 use base64::Engine as _;
 use glam::Vec3;
 use serde::Serialize;
+use std::io::{Read as _, Write as _};
 use std::path::Path;
 
 /// The page, with the data tag [`DATA_TAG`] that the payload replaces.
@@ -140,15 +145,43 @@ struct Payload<'a> {
     plot_svg: Option<&'a str>,
 }
 
-/// Base64 of the values as little-endian binary16, RGB interleaved.
-pub fn half_base64(values: impl Iterator<Item = Vec3>) -> String {
-    let mut bytes = Vec::new();
-    for v in values {
-        for c in v.to_array() {
-            bytes.extend_from_slice(&half::f16::from_f32(c).to_le_bytes());
-        }
-    }
+/// The payload's form of an image: its values as binary16, RGB interleaved, the little-endian
+/// bytes split into a plane of low bytes and then one of high bytes, zlib (RFC 1950) at level 6,
+/// base64. Deterministic: the same values give the same string.
+pub fn encode_halves(values: impl Iterator<Item = Vec3>) -> String {
+    let halves: Vec<u16> = values
+        .flat_map(|v| v.to_array())
+        .map(|c| half::f16::from_f32(c).to_bits())
+        .collect();
+    let mut planes = Vec::with_capacity(2 * halves.len());
+    planes.extend(halves.iter().map(|h| (h & 0xff) as u8));
+    planes.extend(halves.iter().map(|h| (h >> 8) as u8));
+    let mut z = flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::default());
+    // writing to a Vec cannot fail
+    z.write_all(&planes).expect("deflate into memory");
+    let bytes = z.finish().expect("deflate into memory");
     base64::engine::general_purpose::STANDARD.encode(bytes)
+}
+
+/// The inverse of [`encode_halves`]: the binary16 values as f32 (for tests and tools).
+pub fn decode_halves(text: &str) -> Result<Vec<f32>> {
+    let bad = |m: String| Error::Settings(format!("report image data: {m}"));
+    let z = base64::engine::general_purpose::STANDARD
+        .decode(text)
+        .map_err(|e| bad(e.to_string()))?;
+    let mut planes = Vec::new();
+    flate2::read::ZlibDecoder::new(&z[..])
+        .read_to_end(&mut planes)
+        .map_err(|e| bad(e.to_string()))?;
+    if planes.len() % 2 != 0 {
+        return Err(bad("an odd number of bytes".into()));
+    }
+    let (lo, hi) = planes.split_at(planes.len() / 2);
+    Ok(lo
+        .iter()
+        .zip(hi)
+        .map(|(&l, &h)| half::f16::from_le_bytes([l, h]).to_f32())
+        .collect())
 }
 
 impl Report {
@@ -178,11 +211,11 @@ impl Report {
                     name: &i.name,
                     group: &i.group,
                     reference: i.reference,
-                    rgb: half_base64(i.rgb.iter().copied()),
+                    rgb: encode_halves(i.rgb.iter().copied()),
                     stderr: i
                         .variance
                         .as_ref()
-                        .map(|v| half_base64(v.iter().map(|x| x.max(Vec3::ZERO).powf(0.5)))),
+                        .map(|v| encode_halves(v.iter().map(|x| x.max(Vec3::ZERO).powf(0.5)))),
                 })
                 .collect(),
             tables: &self.tables,
@@ -420,17 +453,23 @@ mod tests {
     #[test]
     fn half_floats_round_trip_within_their_precision() {
         let v = [Vec3::new(0.0, 1.0, -2.5), Vec3::new(1e-3, 65504.0, 0.333)];
-        let b = base64::engine::general_purpose::STANDARD
-            .decode(half_base64(v.iter().copied()))
-            .unwrap();
-        assert_eq!(b.len(), 12);
-        let back: Vec<f32> = b
-            .chunks(2)
-            .map(|c| half::f16::from_le_bytes([c[0], c[1]]).to_f32())
-            .collect();
+        let back = decode_halves(&encode_halves(v.iter().copied())).unwrap();
+        assert_eq!(back.len(), 6);
         for (x, y) in v.iter().flat_map(|p| p.to_array()).zip(back) {
             assert!((x - y).abs() <= x.abs() * 2f32.powi(-11), "{x} {y}");
         }
+        // the planes: 0x3c00 (1.0) is low byte 0x00, high byte 0x3c
+        let one = encode_halves(std::iter::once(Vec3::ONE));
+        let z = base64::engine::general_purpose::STANDARD
+            .decode(one)
+            .unwrap();
+        let mut planes = Vec::new();
+        flate2::read::ZlibDecoder::new(&z[..])
+            .read_to_end(&mut planes)
+            .unwrap();
+        assert_eq!(planes, [0, 0, 0, 0x3c, 0x3c, 0x3c]);
+        assert!(decode_halves("not base64!").is_err());
+        assert!(decode_halves("AAAA").is_err());
     }
 
     #[test]
