@@ -279,8 +279,8 @@ pub struct ExperimentArgs {
     /// depth are used, and its scene hash must match the scene.
     #[arg(long)]
     pub reference: PathBuf,
-    /// Strategies, comma-separated.
-    #[arg(long, value_parser = strategy_list, default_value = "independent,stratified,importance,combined",
+    /// Strategies, comma-separated (default: the six presets).
+    #[arg(long, value_parser = strategy_list, default_value = "independent,stratified,importance,combined,nee,mis",
           long_help = Strategy::list_help())]
     pub strategies: List<Strategy>,
     /// Independent runs per strategy (seeds SEED, SEED+1, …).
@@ -817,10 +817,13 @@ fn run_compare(args: &CompareArgs) -> Result<()> {
         let mut settings = experiment_settings_list(a, &scene, &reference, &s);
         settings.insert(4, budget);
         let names: Vec<String> = s.regions.iter().map(|r| r.name.clone()).collect();
+        let budget = match args.equal_time {
+            Some(t) => format!("{t} s per run"),
+            None => format!("{} spp per run", args.spp),
+        };
         let title = format!(
-            "vrpt compare: {}, {} ({} runs)",
+            "vrpt compare: {}, {budget}, {} runs",
             a.scene.display(),
-            settings[4].1,
             a.runs
         );
         Report::for_comparison(&c, &reference, &names, &title, settings)?.write(p)?;
