@@ -173,26 +173,62 @@ fn check_in_browser(report: &Path, expect: &Value, kind: &str) {
     assert!(passed >= 50, "only {passed} checks ran");
 }
 
-/// A 48×48 reference of the shipped Cornell box (MIS, 512 spp) and the scene's path.
-fn reference(dir: &Path) -> (PathBuf, String) {
-    let scene = common::cornell_path().to_str().unwrap().to_string();
-    let r = dir.join("ref.exr");
+/// Render the shipped Cornell box at 48×48 to `out` (an EXR) and read it back.
+fn render(spp: u32, seed: u64, strategy: &str, out: &Path) -> RgbImage {
+    let scene = common::cornell_path();
+    let (spp, seed) = (spp.to_string(), seed.to_string());
     vrpt(&[
         "render",
-        &scene,
+        scene.to_str().unwrap(),
         "--width",
         "48",
         "--height",
         "48",
         "--spp",
-        "512",
+        &spp,
         "--seed",
-        "99",
+        &seed,
+        "--strategy",
+        strategy,
         "-q",
         "-o",
-        r.to_str().unwrap(),
+        out.to_str().unwrap(),
     ]);
-    (r, scene)
+    read_exr(out).unwrap()
+}
+
+/// A 48×48 reference of the shipped Cornell box (MIS, 512 spp): its path, the scene's path
+/// and the image.
+fn reference(dir: &Path) -> (PathBuf, String, RgbImage) {
+    let r = dir.join("ref.exr");
+    let image = render(512, 99, "mis", &r);
+    (
+        r,
+        common::cornell_path().to_str().unwrap().to_string(),
+        image,
+    )
+}
+
+/// What the page must show, and the browser run: the metrics, probe pixels and the A/B pair
+/// of `shown` (the image the page shows first) against the reference, and a hover over the
+/// `pick`-th probe pixel reading `shown` and the reference.
+fn check_expected(
+    report: &Path,
+    kind: &str,
+    metrics: Vec<Value>,
+    (name, shown): (&str, &RgbImage),
+    r: &RgbImage,
+    pick: fn(usize) -> usize,
+) {
+    let probe = probes(shown, r);
+    let [hx, hy] = probe[pick(probe.len())];
+    let expect = json!({
+        "metrics": metrics,
+        "probe": probe,
+        "hover": hover(hx, hy, &[(name, shown), ("reference", r)]),
+        "ab": {"a": name, "b": "reference"},
+    });
+    check_in_browser(report, &expect, kind);
 }
 
 #[test]
@@ -201,7 +237,7 @@ fn compare_report_in_a_browser() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
-    let (r, scene) = reference(dir.path());
+    let (r, scene, ref_image) = reference(dir.path());
     let s = |p: &Path| p.to_str().unwrap().to_string();
     let (report, results) = (dir.path().join("compare.html"), dir.path().join("c.json"));
     vrpt(&[
@@ -224,25 +260,8 @@ fn compare_report_in_a_browser() {
         &s(&report),
     ]);
     // the first run of each strategy is the render with seed 1: the same image as an EXR
-    let mis = dir.path().join("mis.exr");
-    vrpt(&[
-        "render",
-        &scene,
-        "--width",
-        "48",
-        "--height",
-        "48",
-        "--spp",
-        "16",
-        "--seed",
-        "1",
-        "--strategy",
-        "mis",
-        "-q",
-        "-o",
-        &s(&mis),
-    ]);
-    let (mis, r) = (read_exr(&mis).unwrap(), read_exr(&r).unwrap());
+    let mis = render(16, 1, "mis", &dir.path().join("mis.exr"));
+    let r = ref_image;
     let p = payload(&report);
     assert_payload_holds(&p, "mis", "", &mis);
     assert_payload_holds(&p, "reference", "", &r);
@@ -259,15 +278,9 @@ fn compare_report_in_a_browser() {
         }
     }
     assert!(expect_metrics.len() >= 20);
-    let probe = probes(&mis, &r);
-    let [hx, hy] = probe[probe.len() / 2];
-    let expect = json!({
-        "metrics": expect_metrics,
-        "probe": probe,
-        "hover": hover(hx, hy, &[("mis", &mis), ("reference", &r)]),
-        "ab": {"a": "mis", "b": "reference"},
+    check_expected(&report, "compare", expect_metrics, ("mis", &mis), &r, |n| {
+        n / 2
     });
-    check_in_browser(&report, &expect, "compare");
 }
 
 #[test]
@@ -276,7 +289,7 @@ fn converge_report_in_a_browser() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
-    let (r, scene) = reference(dir.path());
+    let (r, scene, ref_image) = reference(dir.path());
     let s = |p: &Path| p.to_str().unwrap().to_string();
     let (report, results) = (dir.path().join("converge.html"), dir.path().join("c.json"));
     vrpt(&[
@@ -299,28 +312,9 @@ fn converge_report_in_a_browser() {
         &s(&report),
     ]);
     // the first image shown is nee at 8 spp (the first group); mis at 32 spp is another group
-    let [nee8, mis32] = [("nee", "8"), ("mis", "32")].map(|(strategy, spp)| {
-        let out = dir.path().join(format!("{strategy}{spp}.exr"));
-        vrpt(&[
-            "render",
-            &scene,
-            "--width",
-            "48",
-            "--height",
-            "48",
-            "--spp",
-            spp,
-            "--seed",
-            "1",
-            "--strategy",
-            strategy,
-            "-q",
-            "-o",
-            &s(&out),
-        ]);
-        read_exr(&out).unwrap()
-    });
-    let r = read_exr(&r).unwrap();
+    let nee8 = render(8, 1, "nee", &dir.path().join("nee8.exr"));
+    let mis32 = render(32, 1, "mis", &dir.path().join("mis32.exr"));
+    let r = ref_image;
     let p = payload(&report);
     assert_payload_holds(&p, "nee", "8 spp", &nee8);
     assert_payload_holds(&p, "mis", "32 spp", &mis32);
@@ -340,15 +334,14 @@ fn converge_report_in_a_browser() {
         expect_metrics
             .push(json!({"table": 1, "row": pt["strategy"], "column": col, "value": pt["mse"]}));
     }
-    let probe = probes(&nee8, &r);
-    let [hx, hy] = probe[0];
-    let expect = json!({
-        "metrics": expect_metrics,
-        "probe": probe,
-        "hover": hover(hx, hy, &[("nee", &nee8), ("reference", &r)]),
-        "ab": {"a": "nee", "b": "reference"},
-    });
-    check_in_browser(&report, &expect, "converge");
+    check_expected(
+        &report,
+        "converge",
+        expect_metrics,
+        ("nee", &nee8),
+        &r,
+        |_| 0,
+    );
 }
 
 #[test]
@@ -357,29 +350,13 @@ fn diff_report_in_a_browser() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
-    let (r, scene) = reference(dir.path());
+    let (r, _, ref_image) = reference(dir.path());
     let s = |p: &Path| p.to_str().unwrap().to_string();
     let img = dir.path().join("nee.exr");
-    vrpt(&[
-        "render",
-        &scene,
-        "--width",
-        "48",
-        "--height",
-        "48",
-        "--spp",
-        "16",
-        "--seed",
-        "5",
-        "--strategy",
-        "nee",
-        "-q",
-        "-o",
-        &s(&img),
-    ]);
+    let a = render(16, 5, "nee", &img);
     let report = dir.path().join("diff.html");
     vrpt(&["diff", &s(&img), &s(&r), "--report", &s(&report)]);
-    let (a, r) = (read_exr(&img).unwrap(), read_exr(&r).unwrap());
+    let r = ref_image;
     let p = payload(&report);
     assert_payload_holds(&p, "nee.exr", "", &a);
     assert_payload_holds(&p, "reference", "", &r);
@@ -395,15 +372,9 @@ fn diff_report_in_a_browser() {
     .iter()
     .map(|(k, v)| json!({"table": 0, "row": "whole image", "column": k, "value": v}))
     .collect();
-    let probe = probes(&a, &r);
-    let [hx, hy] = probe[probe.len() - 1];
-    let expect = json!({
-        "metrics": expect_metrics,
-        "probe": probe,
-        "hover": hover(hx, hy, &[("nee.exr", &a), ("reference", &r)]),
-        "ab": {"a": "nee.exr", "b": "reference"},
+    check_expected(&report, "diff", expect_metrics, ("nee.exr", &a), &r, |n| {
+        n - 1
     });
-    check_in_browser(&report, &expect, "diff");
 }
 
 /// The same compare run twice gives the same report, but for the measured times and what is
@@ -413,7 +384,7 @@ fn diff_report_in_a_browser() {
 #[test]
 fn a_report_is_deterministic_but_for_its_timings() {
     let dir = tempfile::tempdir().unwrap();
-    let (r, scene) = reference(dir.path());
+    let (r, scene, _) = reference(dir.path());
     let s = |p: &Path| p.to_str().unwrap().to_string();
     let run = |name: &str| {
         let out = dir.path().join(name);
