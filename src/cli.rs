@@ -807,20 +807,22 @@ fn run_compare(args: &CompareArgs) -> Result<()> {
         write_comparison_grid(p, &c, &reference, args.exposure)?;
     }
     if let Some(p) = &a.report {
-        let budget = match args.equal_time {
+        // the budget of a run: its settings row and the title's words
+        let (key, value, budget) = match args.equal_time {
             Some(t) => (
-                "time per run".into(),
+                "time per run",
                 format!("{t} s (passes of {} spp)", args.spp),
+                format!("{t} s per run"),
             ),
-            None => ("spp per run".into(), args.spp.to_string()),
+            None => (
+                "spp per run",
+                args.spp.to_string(),
+                format!("{} spp per run", args.spp),
+            ),
         };
         let mut settings = experiment_settings_list(a, &scene, &reference, &s);
-        settings.insert(4, budget);
+        settings.insert(4, (key.into(), value));
         let names: Vec<String> = s.regions.iter().map(|r| r.name.clone()).collect();
-        let budget = match args.equal_time {
-            Some(t) => format!("{t} s per run"),
-            None => format!("{} spp per run", args.spp),
-        };
         let title = format!(
             "vrpt compare: {}, {budget}, {} runs",
             a.scene.display(),
