@@ -23,6 +23,10 @@ use std::time::{Duration, Instant};
 /// Tile edge in pixels.
 pub const TILE: u32 = 16;
 
+/// How many sample indices there are: a sample index is a `u32`, so a render's samples
+/// `first_sample .. first_sample + spp` end at most here (the metadata check agrees).
+pub const SAMPLE_INDICES: u64 = 1 << 32;
+
 /// What to render, and how.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RenderSettings {
@@ -214,11 +218,11 @@ fn camera_for(scene: &Scene, settings: &RenderSettings) -> Result<Camera> {
             "width, height, spp and max depth must be at least 1".into(),
         ));
     }
-    if settings.first_sample.checked_add(settings.spp).is_none() {
+    let end = settings.first_sample as u64 + settings.spp as u64;
+    if end > SAMPLE_INDICES {
         return Err(Error::Settings(format!(
-            "samples {} .. {} go beyond the last sample index, {}",
+            "samples {} .. {end} go beyond the last sample index, {}",
             settings.first_sample,
-            settings.first_sample as u64 + settings.spp as u64,
             u32::MAX
         )));
     }
@@ -240,9 +244,9 @@ pub fn render(
     let camera = camera_for(scene, settings)?;
     with_threads(settings.threads, || {
         let mut film = Film::new(settings.width, settings.height);
-        let first = settings.first_sample;
+        let first = settings.first_sample as u64;
         let pass = SamplePass {
-            origin: first,
+            origin: settings.first_sample,
             size: settings.spp,
         };
         let stats = render_range(
@@ -250,7 +254,7 @@ pub fn render(
             &camera,
             settings,
             pass,
-            first..first + settings.spp,
+            first..first + settings.spp as u64,
             &mut film,
             progress,
         );
@@ -265,14 +269,15 @@ struct SamplePass {
     size: u32,
 }
 
-/// Render the samples `range` (all within `pass`) into `film`, going on from the sums it holds,
-/// on the current rayon pool, with the sampler the strategy names.
+/// Render the samples `range` (sample indices, all within `pass` and below
+/// [`SAMPLE_INDICES`]) into `film`, going on from the sums it holds, on the current rayon pool,
+/// with the sampler the strategy names.
 fn render_range(
     scene: &Scene,
     camera: &Camera,
     settings: &RenderSettings,
     pass: SamplePass,
-    range: Range<u32>,
+    range: Range<u64>,
     film: &mut Film,
     progress: &dyn Progress,
 ) -> RenderStats {
@@ -357,12 +362,21 @@ pub struct Rendered {
     pub interrupted: bool,
 }
 
+/// The pass that holds sample `done` (relative to the render's first sample) of a render of
+/// `spp` samples per pixel in passes of `pass`: `⌊done/pass⌋·pass .. min(that + pass, spp)`.
+/// In u64, so no sum of two sample counts wraps (a u32 sum did, and the render spun for ever).
+pub fn pass_bounds(done: u64, pass: u64, spp: u64) -> Range<u64> {
+    let start = done / pass * pass;
+    start..(start + pass).min(spp)
+}
+
 /// Render `settings.spp` samples per pixel as passes of `plan.pass_spp` samples (sample indices
 /// `first_sample + k·pass_spp ..`, a shorter last pass being a set of its own), merging them
 /// exactly; only the samples of `plan.shard`, if given. Stops early at a whole pass when
 /// `plan.time_limit` runs out, and after the current batch when `plan.stop` is set (a partial
 /// pass is still an unbiased estimate: every sample of a stratified or Sobol set is uniform on
 /// its own). Batches go on from the sums of the pass, so the image does not depend on them.
+/// Sample arithmetic is in u64 and the stop flag is read before every batch and every pass.
 pub fn render_passes(
     scene: &Scene,
     settings: &RenderSettings,
@@ -370,14 +384,16 @@ pub fn render_passes(
     progress: &dyn Progress,
 ) -> Result<Rendered> {
     let camera = camera_for(scene, settings)?;
-    let pass = plan
-        .pass_spp
-        .unwrap_or(settings.spp)
-        .clamp(1, settings.spp.max(1));
+    let spp = settings.spp as u64;
+    let pass = plan.pass_spp.map_or(spp, |p| p as u64).clamp(1, spp.max(1));
     let range = match plan.shard {
-        Some(s) => shard_range(settings.spp, s)?,
-        None => 0..settings.spp,
+        Some(s) => {
+            let r = shard_range(settings.spp, s)?;
+            r.start as u64..r.end as u64
+        }
+        None => 0..spp,
     };
+    let first = settings.first_sample as u64;
     let stopped = || plan.stop.is_some_and(|f| f.load(Ordering::Relaxed));
     let start = Instant::now();
     with_threads(settings.threads, || {
@@ -387,26 +403,32 @@ pub fn render_passes(
         let mut interrupted = false;
         // samples per batch: all of a pass unless the render can be stopped; then one sample
         // first, then what fits in BATCH_SECONDS at the rate measured (at most 4× the last)
-        let mut batch = if plan.stop.is_some() { 1 } else { u32::MAX };
-        while done < range.end && !interrupted {
-            let pass_start = done / pass * pass;
-            let pass_end = (pass_start + pass).min(settings.spp);
+        let mut batch = if plan.stop.is_some() { 1 } else { u64::MAX };
+        while done < range.end {
+            // every pass renders at least one batch (its end lies past `done`), so a render
+            // stopped before its first batch still writes a sample per pixel
+            if done > range.start && stopped() {
+                interrupted = true;
+                break;
+            }
+            let bounds = pass_bounds(done, pass, spp);
+            // a pass starts below spp ≤ 2³² − first: its origin is a sample index, its size
+            // at most spp
             let set = SamplePass {
-                origin: settings.first_sample + pass_start,
-                size: pass_end - pass_start,
+                origin: (first + bounds.start) as u32,
+                size: (bounds.end - bounds.start) as u32,
             };
-            let end = pass_end.min(range.end);
+            let end = bounds.end.min(range.end);
             let mut pass_film = Film::new(settings.width, settings.height);
             while done < end {
                 let n = batch.min(end - done);
                 let t = Instant::now();
-                let first = settings.first_sample + done;
                 let s = render_range(
                     scene,
                     &camera,
                     settings,
                     set,
-                    first..first + n,
+                    first + done..first + done + n,
                     &mut pass_film,
                     progress,
                 );
@@ -421,12 +443,12 @@ pub fn render_passes(
                 }
                 if plan.stop.is_some() {
                     let per_sample = t.elapsed().as_secs_f64() / n as f64;
-                    let fits = (BATCH_SECONDS / per_sample.max(1e-9)) as u32;
+                    let fits = (BATCH_SECONDS / per_sample.max(1e-9)) as u64;
                     batch = fits.clamp(1, n.saturating_mul(4));
                 }
             }
             film.merge(&pass_film).map_err(Error::Settings)?;
-            if plan.time_limit.is_some_and(|t| start.elapsed() >= t) {
+            if interrupted || plan.time_limit.is_some_and(|t| start.elapsed() >= t) {
                 break;
             }
         }
@@ -434,8 +456,8 @@ pub fn render_passes(
         Ok(Rendered {
             film,
             stats,
-            first_sample: settings.first_sample + range.start,
-            spp: done - range.start,
+            first_sample: (first + range.start) as u32,
+            spp: (done - range.start) as u32,
             interrupted,
         })
     })?
@@ -457,7 +479,7 @@ fn render_with<S: Sampler>(
     camera: &Camera,
     settings: &RenderSettings,
     sampler: S,
-    range: Range<u32>,
+    range: Range<u64>,
     film: &mut Film,
     progress: &dyn Progress,
 ) -> RenderStats {
@@ -493,7 +515,8 @@ fn render_with<S: Sampler>(
                     let pixel = UVec2::new(x, y);
                     let (mut sum, mut sum_sq, mut n) = film.pixel_sums(film.index(x, y));
                     for index in range.clone() {
-                        sampler.start_pixel_sample(pixel, index);
+                        // below SAMPLE_INDICES (checked by camera_for): a u32
+                        sampler.start_pixel_sample(pixel, index as u32);
                         let (o, d) = camera.generate_ray(pixel, CameraSample::draw(sampler).pixel);
                         let l = radiance(scene, o, d, sampler, &integrator, &mut tile.rays);
                         if l.is_finite() {
@@ -505,11 +528,11 @@ fn render_with<S: Sampler>(
                             tile.nonfinite += 1;
                         }
                     }
-                    tile.samples += range.len() as u64;
+                    tile.samples += range.end - range.start;
                     tile.sums.push((sum, sum_sq, n));
                 }
             }
-            progress.advance((size.x * size.y) as u64 * range.len() as u64);
+            progress.advance((size.x * size.y) as u64 * (range.end - range.start));
             tile.time = tile_start.elapsed();
             tile
         })

@@ -339,6 +339,31 @@ fn sample_ranges_past_the_last_index_are_refused() {
         &["beyond the last sample index"],
     );
     assert!(!out.exists());
+    // the last sample index is 2³² − 1: a range that ends at 2³² renders, and its metadata is
+    // read back (the render and the metadata check agree; the render refused it before)
+    let last = vrpt(&[
+        "render",
+        cb.to_str().unwrap(),
+        "--first-sample",
+        "4294967292",
+        "--spp",
+        "4",
+        "--width",
+        "4",
+        "--height",
+        "4",
+        "-q",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(
+        last.status.success(),
+        "{}",
+        String::from_utf8_lossy(&last.stderr)
+    );
+    let img = vrpt::image_io::read_exr(&out).unwrap();
+    let m = vrpt::output::RenderMetadata::require(&img, &out).unwrap();
+    assert_eq!((m.first_sample, m.spp), (4_294_967_292, 4));
 }
 
 /// Render a 4×4 EXR and return its path.

@@ -194,8 +194,8 @@ fn batches_do_not_change_a_pixel() {
 #[cfg(unix)]
 fn signalled_render(output: &Path, signals: &[&str]) -> Output {
     let scene = common::cornell_path();
-    let child = Command::new(env!("CARGO_BIN_EXE_vrpt"))
-        .args([
+    signalled(
+        &[
             "render",
             scene.to_str().unwrap(),
             "--width",
@@ -207,7 +207,18 @@ fn signalled_render(output: &Path, signals: &[&str]) -> Output {
             "-q",
             "-o",
             output.to_str().unwrap(),
-        ])
+        ],
+        signals,
+    )
+}
+
+/// Run vrpt with `args` in the background for 1.5 s, send it `signals`, and wait for it to end:
+/// within 30 s (the render stops within a batch, about 0.25 s, and a write), or the process is
+/// killed and the test fails (instead of hanging with it).
+#[cfg(unix)]
+fn signalled(args: &[&str], signals: &[&str]) -> Output {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_vrpt"))
+        .args(args)
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
@@ -223,10 +234,54 @@ fn signalled_render(output: &Path, signals: &[&str]) -> Output {
         .unwrap();
     assert!(st.success());
     let t = Instant::now();
-    let out = child.wait_with_output().unwrap();
-    // the render stops within a batch (about 0.25 s) and a write
-    assert!(t.elapsed() < Duration::from_secs(30), "did not stop");
-    out
+    while child.try_wait().unwrap().is_none() {
+        if t.elapsed() > Duration::from_secs(30) {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("vrpt {args:?} did not stop within 30 s of SIG{signals:?}");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    child.wait_with_output().unwrap()
+}
+
+/// A shard whose passes end past 2³¹ samples (issue 24): the pass arithmetic was u32 and
+/// wrapped, the inner loop never ran, and the outer loop spun for ever, deaf to SIGTERM. Now the
+/// render renders (1.4·10⁹ samples of one pixel would take minutes) and stops within a batch
+/// of a SIGTERM, writing the samples taken.
+#[cfg(unix)]
+#[test]
+fn a_render_past_two_to_the_31_samples_renders_and_stops_on_sigterm() {
+    let dir = tempfile::tempdir().unwrap();
+    let exr = dir.path().join("x.exr");
+    let scene = common::cornell_path();
+    let out = signalled(
+        &[
+            "render",
+            scene.to_str().unwrap(),
+            "--width",
+            "1",
+            "--height",
+            "1",
+            "--spp",
+            "4294967295",
+            "--pass-spp",
+            "2200000000",
+            "--shard",
+            "2/3",
+            "-o",
+            exr.to_str().unwrap(),
+        ],
+        &["TERM"],
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(130), "{stderr}");
+    let img = read_exr(&exr).unwrap();
+    let m = RenderMetadata::require(&img, &exr).unwrap();
+    assert!(m.interrupted);
+    // shard 2 of 3 starts at ⌊2·(2³² − 1)/3⌋, in the second pass
+    assert_eq!(m.first_sample, 2_863_311_530);
+    assert!(m.spp >= 1, "{stderr}");
 }
 
 #[cfg(unix)]
