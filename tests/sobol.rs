@@ -70,7 +70,7 @@ fn pixels_are_independent() {
         (0..n)
             .map(|i| {
                 s.start_pixel_sample(p, i);
-                s.skip(d as u32);
+                s.skip_1d(d as u32);
                 s.next_1d() as f64
             })
             .collect()

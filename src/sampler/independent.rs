@@ -44,7 +44,13 @@ impl Sampler for IndependentSampler {
     }
 
     #[inline]
-    fn skip(&mut self, n: u32) {
+    fn skip_1d(&mut self, n: u32) {
+        self.dim += n as u64;
+    }
+
+    /// A 2D value is one hash, one dimension index.
+    #[inline]
+    fn skip_2d(&mut self, n: u32) {
         self.dim += n as u64;
     }
 

@@ -28,9 +28,26 @@ pub trait Sampler: Clone + Send + Sync {
     fn next_1d(&mut self) -> f32;
     /// The next 2D dimension of the current sample, in `[0, 1)^2`.
     fn next_2d(&mut self) -> Vec2;
-    /// Pass over `n` dimensions without drawing them (what `n` draws would do to the
-    /// dimension counter, at no cost).
-    fn skip(&mut self, n: u32);
+    /// Pass over `n` 1D dimensions of the layout without using them: afterwards the sampler is
+    /// where `n` calls of [`Sampler::next_1d`] would leave it. The default draws them; a
+    /// sampler whose draws depend on the dimension index only overrides it to advance its
+    /// counter, at no cost.
+    #[inline]
+    fn skip_1d(&mut self, n: u32) {
+        for _ in 0..n {
+            self.next_1d();
+        }
+    }
+    /// Pass over `n` 2D dimensions: where `n` calls of [`Sampler::next_2d`] would leave it. A
+    /// sampler counts a 2D value in its own units (one index for the stratified and
+    /// independent samplers, two Sobol dimensions for Sobol), so the layout skips 1D and 2D
+    /// values separately and every later decision keeps its dimension.
+    #[inline]
+    fn skip_2d(&mut self, n: u32) {
+        for _ in 0..n {
+            self.next_2d();
+        }
+    }
 }
 
 /// Which sampler draws the points (the `--sampler` flag).

@@ -106,8 +106,14 @@ impl Sampler for SobolSampler {
     }
 
     #[inline]
-    fn skip(&mut self, n: u32) {
+    fn skip_1d(&mut self, n: u32) {
         self.dim += n;
+    }
+
+    /// A 2D value takes two Sobol dimensions (see [`Sampler::next_2d`] below).
+    #[inline]
+    fn skip_2d(&mut self, n: u32) {
+        self.dim += 2 * n;
     }
 
     #[inline]

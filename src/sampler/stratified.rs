@@ -226,7 +226,13 @@ impl Sampler for StratifiedSampler {
     }
 
     #[inline]
-    fn skip(&mut self, n: u32) {
+    fn skip_1d(&mut self, n: u32) {
+        self.dim += n as u64;
+    }
+
+    /// A 2D value is one stratum of one dimension index.
+    #[inline]
+    fn skip_2d(&mut self, n: u32) {
         self.dim += n as u64;
     }
 
@@ -319,7 +325,7 @@ mod tests {
                     );
                     for j in 0..n {
                         sampler.start_pixel_sample(pixel, pass * n + j);
-                        sampler.skip(dim);
+                        sampler.skip_2d(dim);
                         let p = sampler.next_2d();
                         assert!((0.0..1.0).contains(&p.x) && (0.0..1.0).contains(&p.y));
                         let (cx, cy) = ((p.x * a as f32) as u32, (p.y * b as f32) as u32);
