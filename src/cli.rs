@@ -534,14 +534,7 @@ fn run_merge(args: &MergeArgs) -> Result<()> {
         .map(|p| MergeInput::read(p))
         .collect::<Result<Vec<_>>>()?;
     let (m, meta) = merge(&inputs)?;
-    write_exr(
-        &args.output,
-        m.width,
-        m.height,
-        &m.pixels,
-        m.variance.as_deref(),
-        &m.metadata,
-    )?;
+    write_exr(&args.output, &m)?;
     eprintln!(
         "merged {} renders into {} ({} spp)",
         inputs.len(),

@@ -119,6 +119,14 @@ impl Film {
         )
     }
 
+    /// The number of samples in each pixel's mean, row-major (saturating at `u32::MAX`).
+    pub fn sample_counts(&self) -> Vec<u32> {
+        self.count
+            .iter()
+            .map(|&n| n.min(u32::MAX as u64) as u32)
+            .collect()
+    }
+
     /// The mean image, row-major, as f32.
     pub fn mean_image(&self) -> Vec<Vec3> {
         (0..self.len()).map(|i| self.mean(i).as_vec3()).collect()

@@ -6,7 +6,6 @@
 //! Tone mapping for PNG: `v · 2^exposure`, clamped to [0, 1], then the sRGB transfer function.
 
 use crate::error::{Error, Result};
-use exr::image::read::specific_channels::ReadSpecificChannel;
 use exr::prelude::{
     self as exr_prelude, AttributeValue, ReadChannels, ReadLayers, Text, WritableImage,
 };
@@ -41,7 +40,7 @@ impl Format {
 }
 
 /// An RGB image with metadata, as read back from an EXR.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct RgbImage {
     pub width: u32,
     pub height: u32,
@@ -49,6 +48,10 @@ pub struct RgbImage {
     pub pixels: Vec<Vec3>,
     /// The variance of each pixel's mean, when the file has `variance.R/G/B` channels.
     pub variance: Option<Vec<Vec3>>,
+    /// The number of samples in each pixel's mean, when the file has a `samples` channel (u32).
+    /// It differs from the metadata's spp where non-finite samples were dropped (and, with
+    /// adaptive sampling, from pixel to pixel): merges weigh pixels by it.
+    pub samples: Option<Vec<u32>>,
     /// vrpt's metadata (keys without the `vrpt.` prefix).
     pub metadata: BTreeMap<String, String>,
 }
@@ -127,58 +130,51 @@ pub fn write_atomically(
     result
 }
 
-/// Write `pixels` (row-major, `width × height`) as a linear RGB f32 EXR with `metadata`
-/// (stored as string attributes named `vrpt.KEY`) and, if given, the variance of each pixel's
-/// mean as channels `variance.R`, `variance.G`, `variance.B`.
-pub fn write_exr(
-    path: &Path,
-    width: u32,
-    height: u32,
-    pixels: &[Vec3],
-    variance: Option<&[Vec3]>,
-    metadata: &BTreeMap<String, String>,
-) -> Result<()> {
-    assert_eq!(pixels.len(), width as usize * height as usize);
-    let w = width as usize;
-    let size = (w, height as usize);
-    let attributes = |layer: &mut exr_prelude::LayerAttributes| {
-        for (k, v) in metadata {
-            layer.other.insert(
-                Text::from(format!("vrpt.{k}").as_str()),
-                AttributeValue::Text(Text::from(v.as_str())),
-            );
+/// Write `image` as a linear RGB f32 EXR: channels `R`, `G`, `B`, and where the image has them
+/// `variance.R/G/B` (f32) and `samples` (u32), with its metadata stored as string attributes
+/// named `vrpt.KEY`. Through a temporary file (see [`write_atomically`]).
+pub fn write_exr(path: &Path, image: &RgbImage) -> Result<()> {
+    use exr_prelude::{AnyChannel, AnyChannels, Encoding, FlatSamples, Layer, LayerAttributes};
+    let n = image.width as usize * image.height as usize;
+    assert_eq!(image.pixels.len(), n);
+    let f32s = |name: &str, v: Vec<f32>| AnyChannel::new(name, FlatSamples::F32(v));
+    let plane = |v: &[Vec3], c: usize| v.iter().map(|p| p[c]).collect::<Vec<f32>>();
+    let mut list = exr_prelude::SmallVec::new();
+    for (c, name) in ["R", "G", "B"].into_iter().enumerate() {
+        list.push(f32s(name, plane(&image.pixels, c)));
+    }
+    if let Some(var) = &image.variance {
+        assert_eq!(var.len(), n);
+        for (c, name) in ["variance.R", "variance.G", "variance.B"]
+            .into_iter()
+            .enumerate()
+        {
+            list.push(f32s(name, plane(var, c)));
         }
-    };
+    }
+    if let Some(samples) = &image.samples {
+        assert_eq!(samples.len(), n);
+        list.push(AnyChannel::new(
+            "samples",
+            FlatSamples::U32(samples.clone()),
+        ));
+    }
+    let mut attributes = LayerAttributes::default();
+    for (k, v) in &image.metadata {
+        attributes.other.insert(
+            Text::from(format!("vrpt.{k}").as_str()),
+            AttributeValue::Text(Text::from(v.as_str())),
+        );
+    }
+    let layer = Layer::new(
+        (image.width as usize, image.height as usize),
+        attributes,
+        Encoding::default(),
+        AnyChannels::sort(list),
+    );
+    let exr = exr_prelude::Image::from_layer(layer);
     write_atomically(path, |tmp| {
-        let result = match variance {
-            None => {
-                let channels = exr_prelude::SpecificChannels::rgb(|p: exr_prelude::Vec2<usize>| {
-                    let v = pixels[p.y() * w + p.x()];
-                    (v.x, v.y, v.z)
-                });
-                let mut image = exr_prelude::Image::from_channels(size, channels);
-                attributes(&mut image.layer_data.attributes);
-                image.write().to_file(tmp)
-            }
-            Some(var) => {
-                assert_eq!(var.len(), pixels.len());
-                let channels = exr_prelude::SpecificChannels::build()
-                    .with_channel("R")
-                    .with_channel("G")
-                    .with_channel("B")
-                    .with_channel("variance.R")
-                    .with_channel("variance.G")
-                    .with_channel("variance.B")
-                    .with_pixel_fn(|p: exr_prelude::Vec2<usize>| {
-                        let (v, s) = (pixels[p.y() * w + p.x()], var[p.y() * w + p.x()]);
-                        (v.x, v.y, v.z, s.x, s.y, s.z)
-                    });
-                let mut image = exr_prelude::Image::from_channels(size, channels);
-                attributes(&mut image.layer_data.attributes);
-                image.write().to_file(tmp)
-            }
-        };
-        result.map_err(|e| e.to_string())
+        exr.write().to_file(tmp).map_err(|e| e.to_string())
     })
 }
 
@@ -276,83 +272,102 @@ fn check_exr_size(path: &Path) -> Result<()> {
 /// The most pixels an EXR may declare per byte of its file (see [`read_exr`]).
 pub const MAX_PIXELS_PER_BYTE: u64 = 1024;
 
-/// Read the first RGB layer of an EXR, its `variance.*` channels if any, and vrpt's metadata.
+/// Read the first RGB layer of an EXR, its `variance.*` and `samples` channels if any, and
+/// vrpt's metadata. Every pixel must be a finite colour, every variance finite and
+/// non-negative, every sample count a whole number (any other channel is ignored).
 pub fn read_exr(path: &Path) -> Result<RgbImage> {
+    use exr_prelude::FlatSamples;
     if !path.exists() {
         return Err(Error::NotFound {
             path: path.to_path_buf(),
         });
     }
     check_exr_size(path)?;
-    type Px = (f32, f32, f32, f32, f32, f32);
-    type Pixels = (usize, Vec<Px>);
-    let image = exr_prelude::read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .specific_channels()
-        .required("R")
-        .required("G")
-        .required("B")
-        .optional("variance.R", f32::NAN)
-        .optional("variance.G", f32::NAN)
-        .optional("variance.B", f32::NAN)
-        .collect_pixels(
-            |res: exr_prelude::Vec2<usize>, _| -> Pixels {
-                (
-                    res.width(),
-                    vec![(0.0, 0.0, 0.0, 0.0, 0.0, 0.0); res.width() * res.height()],
-                )
-            },
-            |px: &mut Pixels, p: exr_prelude::Vec2<usize>, v: Px| {
-                px.1[p.y() * px.0 + p.x()] = v;
-            },
-        )
-        .first_valid_layer()
-        .all_attributes()
-        .from_file(path)
-        .map_err(|e| Error::ImageRead {
-            path: path.to_path_buf(),
-            message: e.to_string(),
-        })?;
-    let size = image.layer_data.size;
-    let mut metadata = BTreeMap::new();
-    for (k, v) in &image.layer_data.attributes.other {
-        if let (Some(key), AttributeValue::Text(t)) = (k.to_string().strip_prefix("vrpt."), v) {
-            metadata.insert(key.to_string(), t.to_string());
-        }
-    }
-    let px = &image.layer_data.channel_data.pixels.1;
-    let ch = &image.layer_data.channel_data.channels;
-    let variance_channels = [ch.3.is_some(), ch.4.is_some(), ch.5.is_some()];
-    let has_variance = variance_channels == [true; 3];
     let err = |message: String| Error::ImageRead {
         path: path.to_path_buf(),
         message,
     };
-    if !has_variance && variance_channels.contains(&true) {
+    let image = exr_prelude::read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_file(path)
+        .map_err(|e| err(e.to_string()))?;
+    let layer = &image.layer_data;
+    let size = layer.size;
+    let (width, height) = (size.width(), size.height());
+    let mut metadata = BTreeMap::new();
+    for (k, v) in &layer.attributes.other {
+        if let (Some(key), AttributeValue::Text(t)) = (k.to_string().strip_prefix("vrpt."), v) {
+            metadata.insert(key.to_string(), t.to_string());
+        }
+    }
+    let find = |name: &str| {
+        layer
+            .channel_data
+            .list
+            .iter()
+            .find(|c| c.name == Text::from(name))
+            .map(|c| &c.sample_data)
+    };
+    let at = |i: usize| (i % width.max(1), i / width.max(1));
+    let rgb_of = |names: [&str; 3]| -> Option<Vec<Vec3>> {
+        let planes: Vec<Vec<f32>> = names
+            .iter()
+            .map(|n| find(n).map(|d| d.values_as_f32().collect()))
+            .collect::<Option<_>>()?;
+        Some(
+            (0..width * height)
+                .map(|i| Vec3::new(planes[0][i], planes[1][i], planes[2][i]))
+                .collect(),
+        )
+    };
+    let pixels = rgb_of(["R", "G", "B"]).ok_or_else(|| err("has no R, G and B channels".into()))?;
+    if let Some(i) = pixels.iter().position(|p| !p.is_finite()) {
+        let (x, y) = at(i);
+        return Err(err(format!("pixel ({x}, {y}) is not a finite colour")));
+    }
+    let variance_names = ["variance.R", "variance.G", "variance.B"];
+    let variance = rgb_of(variance_names);
+    if variance.is_none() && variance_names.iter().any(|n| find(n).is_some()) {
         return Err(err(
             "has some of the channels variance.R, variance.G, variance.B but not all".into(),
         ));
     }
-    let width = size.width().max(1);
-    for (i, p) in px.iter().enumerate() {
-        let rgb = [p.0, p.1, p.2];
-        let var = [p.3, p.4, p.5];
-        let (x, y) = (i % width, i / width);
-        if !rgb.iter().all(|c| c.is_finite()) {
-            return Err(err(format!("pixel ({x}, {y}) is not a finite colour")));
-        }
-        if has_variance && !var.iter().all(|v| v.is_finite() && *v >= 0.0) {
-            return Err(err(format!(
-                "the variance of pixel ({x}, {y}) is not a finite non-negative number"
-            )));
-        }
+    if let Some(i) = variance.as_ref().and_then(|v| {
+        v.iter()
+            .position(|p| !(p.is_finite() && p.min_element() >= 0.0))
+    }) {
+        let (x, y) = at(i);
+        return Err(err(format!(
+            "the variance of pixel ({x}, {y}) is not a finite non-negative number"
+        )));
     }
+    let samples = match find("samples") {
+        None => None,
+        Some(FlatSamples::U32(v)) => Some(v.clone()),
+        Some(other) => {
+            let v: Vec<f32> = other.values_as_f32().collect();
+            if let Some(i) = v
+                .iter()
+                .position(|&c| !(c >= 0.0 && c <= u32::MAX as f32 && c.fract() == 0.0))
+            {
+                let (x, y) = at(i);
+                return Err(err(format!(
+                    "the sample count of pixel ({x}, {y}) is not a whole number"
+                )));
+            }
+            Some(v.iter().map(|&c| c as u32).collect())
+        }
+    };
     Ok(RgbImage {
-        width: size.width() as u32,
-        height: size.height() as u32,
-        pixels: px.iter().map(|p| Vec3::new(p.0, p.1, p.2)).collect(),
-        variance: has_variance.then(|| px.iter().map(|p| Vec3::new(p.3, p.4, p.5)).collect()),
+        width: width as u32,
+        height: height as u32,
+        pixels,
+        variance,
+        samples,
         metadata,
     })
 }
@@ -381,17 +396,21 @@ mod tests {
         let px: Vec<Vec3> = (0..6).map(|i| Vec3::new(i as f32, 0.5, -1.0)).collect();
         let mut meta = BTreeMap::new();
         meta.insert("spp".to_string(), "64".to_string());
-        write_exr(&path, 3, 2, &px, None, &meta).unwrap();
+        let mut image = RgbImage {
+            width: 3,
+            height: 2,
+            pixels: px.clone(),
+            metadata: meta,
+            ..RgbImage::default()
+        };
+        write_exr(&path, &image).unwrap();
         let img = read_exr(&path).unwrap();
-        assert_eq!((img.width, img.height), (3, 2));
-        assert_eq!(img.pixels, px);
-        assert_eq!(img.variance, None);
+        assert_eq!(img, image);
         assert_eq!(img.metadata.get("spp").map(String::as_str), Some("64"));
-        let var: Vec<Vec3> = (0..6).map(|i| Vec3::splat(i as f32 * 0.25)).collect();
-        write_exr(&path, 3, 2, &px, Some(&var), &meta).unwrap();
-        let img = read_exr(&path).unwrap();
-        assert_eq!(img.pixels, px);
-        assert_eq!(img.variance, Some(var));
+        image.variance = Some((0..6).map(|i| Vec3::splat(i as f32 * 0.25)).collect());
+        image.samples = Some(vec![0, 1, 7, 64, 1 << 30, u32::MAX]);
+        write_exr(&path, &image).unwrap();
+        assert_eq!(read_exr(&path).unwrap(), image);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

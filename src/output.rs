@@ -31,6 +31,9 @@ pub struct RenderMetadata {
     pub first_sample: u64,
     /// The seed; `None` for a merge of several renders.
     pub seed: Option<u64>,
+    /// The seeds of a merge's inputs (sorted, each once; empty for a single render): which
+    /// random streams the image holds, so an experiment never reuses them.
+    pub merged_seeds: Vec<u64>,
     pub strategy: Strategy,
     pub max_depth: u32,
     /// Wall time of the render (summed over the inputs of a merge).
@@ -64,6 +67,7 @@ impl RenderMetadata {
             spp: settings.spp as u64,
             first_sample: settings.first_sample as u64,
             seed: Some(settings.seed),
+            merged_seeds: Vec::new(),
             strategy: settings.strategy,
             max_depth: settings.max_depth,
             render_seconds: stats.elapsed.as_secs_f64(),
@@ -75,6 +79,15 @@ impl RenderMetadata {
             shard: None,
             requested_spp: None,
             interrupted: false,
+        }
+    }
+
+    /// Every seed whose samples the image holds: its seed, or its inputs' for a merge (empty
+    /// for a merge made before merges recorded them).
+    pub fn seeds(&self) -> Vec<u64> {
+        match self.seed {
+            Some(s) => vec![s],
+            None => self.merged_seeds.clone(),
         }
     }
 
@@ -114,6 +127,10 @@ impl RenderMetadata {
         }
         if let Some(f) = &self.merged_from {
             put("merged_from", f.clone());
+        }
+        if !self.merged_seeds.is_empty() {
+            let seeds: Vec<String> = self.merged_seeds.iter().map(u64::to_string).collect();
+            put("merged_seeds", seeds.join(","));
         }
         if let Some(i) = &self.image {
             put("image", i.clone());
@@ -190,6 +207,13 @@ impl RenderMetadata {
             spp,
             first_sample,
             seed,
+            merged_seeds: match a.get("merged_seeds") {
+                None => Vec::new(),
+                Some(v) => v
+                    .split(',')
+                    .map(|s| num("merged_seeds", s))
+                    .collect::<std::result::Result<_, _>>()?,
+            },
             strategy: Strategy {
                 sampler: parse_value(req(a, "sampler")?, "sampler")?,
                 directions: parse_value(req(a, "directions")?, "directions")?,
@@ -278,7 +302,20 @@ pub fn parse_shard(s: &str) -> std::result::Result<(u32, u32), String> {
     Ok((i, n))
 }
 
-/// Write a render: `output` as EXR (mean, variance-of-the-mean channels, metadata) or PNG
+/// The image a render's film makes, as an EXR holds it: the mean, the variance of the mean, the
+/// samples in each pixel's mean, and the metadata.
+pub fn render_image(film: &Film, meta: &RenderMetadata) -> RgbImage {
+    RgbImage {
+        width: film.width,
+        height: film.height,
+        pixels: film.mean_image(),
+        variance: Some(film.variance_image()),
+        samples: Some(film.sample_counts()),
+        metadata: meta.to_attributes(),
+    }
+}
+
+/// Write a render: `output` as EXR (mean, variance of the mean, sample counts, metadata) or PNG
 /// (tone-mapped with `exposure` stops); and, if asked, the variance of the mean alone to the EXR
 /// `variance`. Every file is written to a temporary file and renamed.
 pub fn write_render(
@@ -288,33 +325,23 @@ pub fn write_render(
     exposure: f32,
     variance: Option<&Path>,
 ) -> Result<()> {
-    let attributes = meta.to_attributes();
-    let mean = film.mean_image();
-    let var = film.variance_image();
+    let image = render_image(film, meta);
     match Format::from_path(output)? {
-        Format::Exr => write_exr(
-            output,
-            film.width,
-            film.height,
-            &mean,
-            Some(&var),
-            &attributes,
-        )?,
-        Format::Png => write_png(output, film.width, film.height, &mean, exposure)?,
+        Format::Exr => write_exr(output, &image)?,
+        Format::Png => write_png(output, film.width, film.height, &image.pixels, exposure)?,
     }
     if let Some(v) = variance {
         let vmeta = RenderMetadata {
             image: Some("variance of the mean".into()),
             ..meta.clone()
         };
-        write_exr(
-            v,
-            film.width,
-            film.height,
-            &var,
-            None,
-            &vmeta.to_attributes(),
-        )?;
+        let var = RgbImage {
+            pixels: image.variance.clone().expect("a render's variance"),
+            variance: None,
+            metadata: vmeta.to_attributes(),
+            ..image
+        };
+        write_exr(v, &var)?;
     }
     Ok(())
 }
@@ -334,6 +361,7 @@ mod tests {
             spp: 64,
             first_sample: 32,
             seed: Some(9),
+            merged_seeds: Vec::new(),
             strategy: Preset::Importance.strategy(),
             max_depth: 5,
             render_seconds: 1.5,
@@ -351,8 +379,11 @@ mod tests {
         assert_eq!(RenderMetadata::from_attributes(&a).unwrap(), m);
         let merged = RenderMetadata {
             seed: None,
+            merged_seeds: vec![3, 9, 12],
             ..m.clone()
         };
+        assert_eq!(merged.seeds(), [3, 9, 12]);
+        assert_eq!(m.seeds(), [9]);
         assert_eq!(
             RenderMetadata::from_attributes(&merged.to_attributes()).unwrap(),
             merged
@@ -377,8 +408,8 @@ mod tests {
             width: 2,
             height: 3,
             pixels: vec![glam::Vec3::ZERO; 6],
-            variance: None,
             metadata: a,
+            ..RgbImage::default()
         };
         let e = RenderMetadata::from_image(&img, Path::new("x.exr")).unwrap_err();
         assert!(e.to_string().contains("4×3"), "{e}");

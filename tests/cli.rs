@@ -336,7 +336,14 @@ fn images_whose_metadata_lies_about_their_size_are_refused() {
     meta.insert("width".into(), "64".into());
     meta.insert("first_sample".into(), "2".into());
     let b = dir.path().join("b.exr");
-    vrpt::image_io::write_exr(&b, 4, 4, &img.pixels, img.variance.as_deref(), &meta).unwrap();
+    vrpt::image_io::write_exr(
+        &b,
+        &vrpt::image_io::RgbImage {
+            metadata: meta,
+            ..img.clone()
+        },
+    )
+    .unwrap();
     let m = dir.path().join("m.exr");
     assert_one_line_error(
         &vrpt(&[

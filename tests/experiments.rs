@@ -263,13 +263,7 @@ fn merge_of_two_halves_equals_one_render() {
             )
             .unwrap();
             let (f, st) = (r.film, r.stats);
-            RgbImage {
-                width: 16,
-                height: 16,
-                pixels: f.mean_image(),
-                variance: Some(f.variance_image()),
-                metadata: RenderMetadata::new(&scene, &full, &st).to_attributes(),
-            }
+            vrpt::output::render_image(&f, &RenderMetadata::new(&scene, &full, &st))
         } else {
             common::as_image(&scene, &full)
         };
@@ -313,6 +307,71 @@ fn merge_of_two_halves_equals_one_render() {
         other.metadata.insert("max_depth".into(), "5".into());
         let e = merge(&[input("a", &a), input("b", &other)]).unwrap_err();
         assert!(e.to_string().contains("max_depth"), "{e}");
+    }
+}
+
+/// Issue 24: a film drops non-finite samples per pixel, so a pixel's mean can hold fewer
+/// samples than the render's spp. Two renders of 16 spp whose pixels hold 16, 11, 0 and 3
+/// samples (as drops leave them), written to EXR and read back, merge into exactly the mean
+/// and variance of one film holding all their samples: the merge weighs each pixel by its
+/// `samples` channel. Weighing by the metadata's spp (as before) gets the dropping pixels wrong
+/// by up to 40 % here.
+#[test]
+fn merge_weighs_each_pixel_by_its_sample_count() {
+    use glam::DVec3;
+    use vrpt::film::Film;
+    let dir = tempfile::tempdir().unwrap();
+    let scene = common::shipped("cornell-box");
+    // (count, value of each sample) per pixel of each input; the sums are exact in f64
+    let inputs = [
+        [(16u64, 1.0f64), (11, 2.0), (0, 0.0), (3, 4.0)],
+        [(16, 3.0), (5, 0.5), (9, 1.5), (16, 2.5)],
+    ];
+    let mut films = Vec::new();
+    let mut paths = Vec::new();
+    for (k, pixels) in inputs.iter().enumerate() {
+        let mut f = Film::new(2, 2);
+        for (i, &(n, v)) in pixels.iter().enumerate() {
+            // n samples: half at v, half at 2v (a variance that is not zero)
+            let (lo, hi) = (n / 2, n - n / 2);
+            let sum = v * lo as f64 + 2.0 * v * hi as f64;
+            let sum_sq = v * v * lo as f64 + 4.0 * v * v * hi as f64;
+            f.set_pixel_sums(i, DVec3::splat(sum), DVec3::splat(sum_sq), n);
+        }
+        let settings = RenderSettings {
+            width: 2,
+            height: 2,
+            spp: 16,
+            seed: 40 + k as u64,
+            ..Default::default()
+        };
+        let meta = RenderMetadata::new(&scene, &settings, &Default::default());
+        let path = dir.path().join(format!("{k}.exr"));
+        write_exr(&path, &vrpt::output::render_image(&f, &meta)).unwrap();
+        paths.push(path);
+        films.push(f);
+    }
+    let read: Vec<MergeInput> = paths.iter().map(|p| MergeInput::read(p).unwrap()).collect();
+    assert_eq!(read[0].image.samples.as_deref(), Some(&[16, 11, 0, 3][..]));
+    let (m, meta) = merge(&read).unwrap();
+    assert_eq!(meta.spp, 32);
+    assert_eq!(meta.seeds(), [40, 41]);
+    let mut all = films[0].clone();
+    all.merge(&films[1]).unwrap();
+    assert_eq!(m.samples.as_deref(), Some(&[32, 16, 9, 19][..]));
+    let var = m.variance.as_ref().unwrap();
+    for i in 0..4 {
+        let (want, want_var) = (all.mean(i).x as f32, all.variance_of_mean(i).x as f32);
+        assert!(
+            (m.pixels[i].x - want).abs() <= 1e-6 * want.abs(),
+            "pixel {i}: merged {} but the samples' mean is {want}",
+            m.pixels[i].x
+        );
+        assert!(
+            (var[i].x - want_var).abs() <= 1e-5 * want_var.abs(),
+            "pixel {i}: merged variance {} but {want_var}",
+            var[i].x
+        );
     }
 }
 
@@ -426,11 +485,13 @@ fn merge_and_diff_from_the_command_line() {
     meta.insert("spp".to_string(), "1".to_string());
     write_exr(
         &dir.path().join("h.exr"),
-        1,
-        1,
-        &[glam::Vec3::ONE],
-        None,
-        &meta,
+        &RgbImage {
+            width: 1,
+            height: 1,
+            pixels: vec![glam::Vec3::ONE],
+            metadata: meta,
+            ..RgbImage::default()
+        },
     )
     .unwrap();
     assert_eq!(

@@ -279,15 +279,7 @@ fn readers_survive_mutated_inputs() {
             ..Default::default()
         };
         let img = common::as_image(&scene, &s);
-        vrpt::image_io::write_exr(
-            &exr_path,
-            6,
-            5,
-            &img.pixels,
-            img.variance.as_deref(),
-            &img.metadata,
-        )
-        .unwrap();
+        vrpt::image_io::write_exr(&exr_path, &img).unwrap();
     }
     let exr = std::fs::read(&exr_path).unwrap();
     let mut seeds: Vec<Vec<u8>> = scenes

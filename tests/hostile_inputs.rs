@@ -392,7 +392,7 @@ fn small_exr(dir: &Path, name: &str, seed: &str) -> PathBuf {
 /// command that reads images: merge, diff, compare and converge.
 #[test]
 fn images_whose_metadata_or_content_is_wrong_are_refused() {
-    use vrpt::image_io::{read_exr, write_exr};
+    use vrpt::image_io::{read_exr, write_exr, RgbImage};
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let a = small_exr(d, "a.exr", "0");
@@ -404,7 +404,14 @@ fn images_whose_metadata_or_content_is_wrong_are_refused() {
             None => meta.remove(key),
         };
         let p = d.join(name);
-        write_exr(&p, 4, 4, &img.pixels, img.variance.as_deref(), &meta).unwrap();
+        write_exr(
+            &p,
+            &RgbImage {
+                metadata: meta,
+                ..img.clone()
+            },
+        )
+        .unwrap();
         p
     };
     let mut bad: Vec<(PathBuf, &[&str])> = vec![
@@ -426,12 +433,26 @@ fn images_whose_metadata_or_content_is_wrong_are_refused() {
     let mut px = img.pixels.clone();
     px[5].y = f32::NAN;
     let p = d.join("nan.exr");
-    write_exr(&p, 4, 4, &px, img.variance.as_deref(), &img.metadata).unwrap();
+    write_exr(
+        &p,
+        &RgbImage {
+            pixels: px,
+            ..img.clone()
+        },
+    )
+    .unwrap();
     bad.push((p, &["pixel (1, 1) is not a finite"]));
     let mut var = img.variance.clone().unwrap();
     var[2].z = -1.0;
     let p = d.join("negvar.exr");
-    write_exr(&p, 4, 4, &img.pixels, Some(&var), &img.metadata).unwrap();
+    write_exr(
+        &p,
+        &RgbImage {
+            variance: Some(var),
+            ..img.clone()
+        },
+    )
+    .unwrap();
     bad.push((p, &["variance of pixel (2, 0)"]));
     bad.push((partial_variance(d, &img), &["some of the channels"]));
     bad.push((huge_header(d, &a), &["declares", "more than"]));

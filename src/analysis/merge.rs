@@ -1,9 +1,11 @@
 //! Merging renders of the same scene and settings made with different seeds or sample ranges,
-//! as a reference is built in pieces. Means are combined weighted by spp,
-//! `M = Σ nᵢ mᵢ / Σ nᵢ`; where every input carries the variance of its mean `vᵢ`, the sums of
-//! squares are recovered exactly, `Σx² = vᵢ nᵢ (nᵢ − 1) + nᵢ mᵢ²`, and the merged variance of
-//! the mean is `(Σx² − N M²) / (N (N − 1))`. This equals one render of all the samples, up to
-//! f32 storage rounding.
+//! as a reference is built in pieces. Each pixel's means are combined weighted by the number of
+//! samples in them, `M = Σ nᵢ mᵢ / Σ nᵢ`, with `nᵢ` the input's per-pixel count (its `samples`
+//! channel: the spp less the non-finite samples the film dropped in that pixel; the metadata's
+//! spp for an image made before the channel existed). Where every input carries the variance
+//! of its mean `vᵢ`, the sums of squares are recovered exactly, `Σx² = vᵢ nᵢ (nᵢ − 1) + nᵢ mᵢ²`,
+//! and the merged variance of the mean is `(Σx² − N M²) / (N (N − 1))`. This equals one render of
+//! all the samples (one film holding every input's sums), up to f32 storage rounding.
 
 use crate::error::{Error, Result};
 use crate::image_io::RgbImage;
@@ -90,23 +92,39 @@ pub fn merge(inputs: &[MergeInput]) -> Result<(RgbImage, RenderMetadata)> {
     let total: u64 = inputs.iter().map(|i| i.meta.spp).sum();
     let with_var = inputs.iter().all(|i| i.image.variance.is_some());
     let px = inputs[0].image.pixels.len();
+    // samples in pixel p of input i: its `samples` channel, else the metadata's spp
+    let count = |input: &MergeInput, p: usize| -> u64 {
+        input
+            .image
+            .samples
+            .as_ref()
+            .map_or(input.meta.spp, |s| s[p] as u64)
+    };
     let mut pixels = vec![Vec3::ZERO; px];
     let mut variance = with_var.then(|| vec![Vec3::ZERO; px]);
+    let mut samples = vec![0u32; px];
     for p in 0..px {
-        let (mut sum, mut sum_sq) = (DVec3::ZERO, DVec3::ZERO);
+        let (mut sum, mut sum_sq, mut nt) = (DVec3::ZERO, DVec3::ZERO, 0u64);
         for input in inputs {
-            let (m, n) = (input.image.pixels[p].as_dvec3(), input.meta.spp as f64);
-            sum += m * n;
+            let n = count(input, p);
+            let (m, nf) = (input.image.pixels[p].as_dvec3(), n as f64);
+            sum += m * nf;
+            nt += n;
             if let Some(v) = &input.image.variance {
-                sum_sq += v[p].as_dvec3() * n * (n - 1.0) + m * m * n;
+                sum_sq += v[p].as_dvec3() * nf * (nf - 1.0).max(0.0) + m * m * nf;
             }
         }
-        let nt = total as f64;
-        let mean = sum / nt;
+        samples[p] = u32::try_from(nt).map_err(|_| {
+            Error::Settings(format!(
+                "the merge would hold {nt} samples in one pixel, more than a u32 counts"
+            ))
+        })?;
+        let n = nt as f64;
+        let mean = if nt > 0 { sum / n } else { DVec3::ZERO };
         pixels[p] = mean.as_vec3();
         if let Some(var) = &mut variance {
-            var[p] = if total > 1 {
-                ((sum_sq - mean * mean * nt) / (nt * (nt - 1.0)))
+            var[p] = if nt > 1 {
+                ((sum_sq - mean * mean * n) / (n * (n - 1.0)))
                     .max(DVec3::ZERO)
                     .as_vec3()
             } else {
@@ -118,9 +136,13 @@ pub fn merge(inputs: &[MergeInput]) -> Result<(RgbImage, RenderMetadata)> {
         .iter()
         .map(|i| i.path.display().to_string())
         .collect();
+    let mut seeds: Vec<u64> = inputs.iter().flat_map(|i| i.meta.seeds()).collect();
+    seeds.sort_unstable();
+    seeds.dedup();
     let meta = RenderMetadata {
         spp: total,
         seed: None,
+        merged_seeds: seeds,
         first_sample: 0,
         merged_from: Some(names.join(", ")),
         render_seconds: inputs.iter().map(|i| i.meta.render_seconds).sum(),
@@ -138,6 +160,7 @@ pub fn merge(inputs: &[MergeInput]) -> Result<(RgbImage, RenderMetadata)> {
         height: first.height,
         pixels,
         variance,
+        samples: Some(samples),
         metadata: meta.to_attributes(),
     };
     Ok((image, meta))

@@ -70,13 +70,7 @@ pub fn render_quiet(scene: &Scene, settings: &RenderSettings) -> (Film, RenderSt
 /// Render quietly and return the image as an EXR would hold it (mean, variance, metadata).
 pub fn as_image(scene: &Scene, s: &RenderSettings) -> RgbImage {
     let (film, stats) = render_quiet(scene, s);
-    RgbImage {
-        width: s.width,
-        height: s.height,
-        pixels: film.mean_image(),
-        variance: Some(film.variance_image()),
-        metadata: RenderMetadata::new(scene, s, &stats).to_attributes(),
-    }
+    vrpt::output::render_image(&film, &RenderMetadata::new(scene, s, &stats))
 }
 
 /// Experiment settings for `runs` runs from seed 1 on all cores, no regions.
