@@ -9,9 +9,11 @@
 //!   distribution about the shading normal `n` of the vertex it lights: `p_ω = cosθ/π`, zero
 //!   below. Under a diffuse BSDF `f cosθ / p_ω = kd`, so a white furnace has no variance.
 //! - **Selection**: one light per vertex, chosen with probability proportional to its power
-//!   (a CDF, binary search, O(log n)): `Φ = π A lum(Le)` for a triangle (a one-sided Lambertian
-//!   emitter) and `Φ = 4π · πR² · lum(L_env)` for the environment seen by a scene of bounding
-//!   radius `R` (pbrt's estimate). Any positive choice is unbiased; power keeps the weights tame.
+//!   (a [`Discrete`] distribution, binary search, O(log n)): `Φ = π A lum(Le)` for a triangle (a
+//!   one-sided Lambertian emitter) and `Φ = 4π · πR² · lum(L_env)` for the environment seen by a
+//!   scene of bounding radius `R` (pbrt's estimate). Any positive choice is unbiased; power keeps
+//!   the weights tame. The pmf the pdfs divide by is exactly the frequency of each choice (whole
+//!   units of 2⁻²⁴), also with 10⁶ emitters.
 //!
 //! Every pdf this module returns is per unit solid angle at the receiving point and includes
 //! the selection probability. [`Lights::light_of`] maps a BVH-order primitive to its light, so a
@@ -22,6 +24,7 @@ use crate::material::Material;
 use crate::math::Frame;
 use crate::sampling::{
     cosine_hemisphere_pdf, sample_cosine_hemisphere, sample_uniform_triangle, uniform_triangle_pdf,
+    Discrete,
 };
 use crate::scene::TriShading;
 use glam::{Vec2, Vec3};
@@ -86,10 +89,8 @@ pub struct Lights {
     pub environment: Vec3,
     /// `light_index[prim]`: the light of BVH-order triangle `prim`, or [`NO_LIGHT`].
     light_index: Vec<u32>,
-    /// Selection probability of each triangle light, then of the environment (last).
-    pmf: Vec<f32>,
-    /// Running sums of `pmf` (the CDF), the last forced to 1.
-    cdf: Vec<f32>,
+    /// The choice of a light: each triangle light, then the environment (last).
+    choice: Discrete,
 }
 
 /// Luminance (Rec. 709 weights) of linear RGB.
@@ -101,13 +102,14 @@ pub fn luminance(c: Vec3) -> f32 {
 impl Lights {
     /// The emissive triangles among `shading` (BVH order) with their materials, and the
     /// environment of radiance `environment` lighting a scene of bounding radius `radius`.
+    /// Err with more than 2²⁴ emitters (see [`Discrete`]).
     pub fn build(
         accel: &Accel,
         shading: &[TriShading],
         materials: &[Material],
         environment: Vec3,
         radius: f32,
-    ) -> Lights {
+    ) -> Result<Lights, String> {
         let mut triangles = Vec::new();
         let mut light_index = vec![NO_LIGHT; shading.len()];
         for (prim, s) in shading.iter().enumerate() {
@@ -131,29 +133,12 @@ impl Lights {
             .map(|t| (PI * t.area * luminance(t.emission).max(0.0)) as f64)
             .collect();
         power.push((4.0 * PI * PI * radius * radius * luminance(environment).max(0.0)) as f64);
-        let total: f64 = power.iter().sum();
-        let (pmf, cdf) = if total > 0.0 && total.is_finite() {
-            let pmf: Vec<f32> = power.iter().map(|p| (p / total) as f32).collect();
-            let mut acc = 0.0f64;
-            let mut cdf: Vec<f32> = power
-                .iter()
-                .map(|p| {
-                    acc += p / total;
-                    acc as f32
-                })
-                .collect();
-            *cdf.last_mut().expect("the environment entry") = 1.0;
-            (pmf, cdf)
-        } else {
-            (vec![0.0; power.len()], vec![1.0; power.len()])
-        };
-        Lights {
+        Ok(Lights {
             triangles,
             environment,
             light_index,
-            pmf,
-            cdf,
-        }
+            choice: Discrete::new(&power)?,
+        })
     }
 
     /// Number of emissive triangles.
@@ -168,7 +153,7 @@ impl Lights {
 
     /// True when something can be sampled (an emitter, or a non-black environment).
     pub fn any(&self) -> bool {
-        self.pmf.iter().any(|&p| p > 0.0)
+        self.choice.any()
     }
 
     /// The light that BVH-order triangle `prim` is, if it emits.
@@ -180,27 +165,27 @@ impl Lights {
         }
     }
 
-    /// The probability of choosing triangle light `i`.
+    /// The probability of choosing triangle light `i` (exactly the frequency of
+    /// [`Lights::choose`]).
     #[inline]
     pub fn pmf(&self, i: u32) -> f32 {
-        self.pmf[i as usize]
+        self.choice.pmf(i as usize)
     }
 
     /// The probability of choosing the environment.
     #[inline]
     pub fn environment_pmf(&self) -> f32 {
-        *self.pmf.last().expect("the environment entry")
+        self.choice.pmf(self.triangles.len())
     }
 
-    /// Choose a light with `u ∈ [0,1)`: `Some(i)` for triangle `i`, `None` for the environment.
+    /// Choose a light with `u ∈ [0,1)`: `Some(i)` for triangle `i`, `None` for the environment
+    /// (or when nothing can be chosen: [`Lights::any`] is false).
     #[inline]
     pub fn choose(&self, u: f32) -> Option<u32> {
-        let mut i = self.cdf.partition_point(|&c| c <= u);
-        // skip entries of zero probability that float rounding might land on
-        while i + 1 < self.pmf.len() && self.pmf[i] == 0.0 {
-            i += 1;
+        match self.choice.sample(u) {
+            Some(i) if i < self.triangles.len() => Some(i as u32),
+            _ => None,
         }
-        (i < self.triangles.len()).then_some(i as u32)
     }
 
     /// Sample a light for the point `p` with shading normal `n` (on the side light is gathered
@@ -231,7 +216,7 @@ impl Lights {
                     wi,
                     dist,
                     le: t.emission,
-                    pdf: self.pmf[i as usize] * uniform_triangle_pdf(t.area) * dist2 / cos_l,
+                    pdf: self.pmf(i) * uniform_triangle_pdf(t.area) * dist2 / cos_l,
                 })
             }
             None => {
@@ -261,7 +246,7 @@ impl Lights {
         if cos_l <= 0.0 || dist2 <= 0.0 {
             return 0.0;
         }
-        self.pmf[i as usize] * uniform_triangle_pdf(t.area) * dist2 / cos_l
+        self.pmf(i) * uniform_triangle_pdf(t.area) * dist2 / cos_l
     }
 
     /// The pdf per solid angle with which [`Lights::sample`] at a point of shading normal `n`

@@ -153,7 +153,12 @@ impl Scene {
             }
         });
         let radius = 0.5 * (hi - lo).length();
-        let lights = Lights::build(&accel, &shading, &materials, environment, radius);
+        let lights = Lights::build(&accel, &shading, &materials, environment, radius).map_err(
+            |message| Error::Scene {
+                path: source.clone(),
+                message,
+            },
+        )?;
         let camera = options.camera.unwrap_or_else(|| frame_bounds(lo, hi));
         let hash = content_hash(&mesh, &materials, &camera, environment);
         let extent = lo
