@@ -309,7 +309,7 @@ pub fn read_exr(path: &Path) -> Result<RgbImage> {
             .channel_data
             .list
             .iter()
-            .find(|c| c.name == name)
+            .find(|c| c.name == *name)
             .map(|c| &c.sample_data)
     };
     let at = |i: usize| (i % width.max(1), i / width.max(1));
