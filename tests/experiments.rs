@@ -360,7 +360,7 @@ fn merge_weighs_each_pixel_by_its_sample_count() {
     all.merge(&films[1]).unwrap();
     assert_eq!(m.samples.as_deref(), Some(&[32, 16, 9, 19][..]));
     let var = m.variance.as_ref().unwrap();
-    for i in 0..4 {
+    for (i, v) in var.iter().enumerate() {
         let (want, want_var) = (all.mean(i).x as f32, all.variance_of_mean(i).x as f32);
         assert!(
             (m.pixels[i].x - want).abs() <= 1e-6 * want.abs(),
@@ -368,9 +368,9 @@ fn merge_weighs_each_pixel_by_its_sample_count() {
             m.pixels[i].x
         );
         assert!(
-            (var[i].x - want_var).abs() <= 1e-5 * want_var.abs(),
+            (v.x - want_var).abs() <= 1e-5 * want_var.abs(),
             "pixel {i}: merged variance {} but {want_var}",
-            var[i].x
+            v.x
         );
     }
 }
