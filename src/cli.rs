@@ -283,10 +283,12 @@ pub struct ExperimentArgs {
     #[arg(long, value_parser = strategy_list, default_value = "independent,stratified,importance,combined,nee,mis",
           long_help = Strategy::list_help())]
     pub strategies: List<Strategy>,
-    /// Independent runs per strategy (seeds SEED, SEED+1, …).
+    /// Independent runs per strategy.
     #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(2..))]
     pub runs: u32,
-    /// Seed of the first run.
+    /// Seed of the first run. The runs take the first RUNS seeds from SEED upward that the
+    /// reference does not hold (its seed, or its merged inputs' seeds), so no run reuses the
+    /// reference's random numbers.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Worker threads (default: all cores).
@@ -760,10 +762,10 @@ fn experiment_settings_list(
         ),
         ("size".into(), format!("{}x{}", s.width, s.height)),
         ("runs".into(), a.runs.to_string()),
-        (
-            "seeds".into(),
-            format!("{}..{}", a.seed, a.seed + a.runs as u64 - 1),
-        ),
+        ("seeds".into(), {
+            let seeds: Vec<String> = s.run_seeds().iter().map(u64::to_string).collect();
+            seeds.join(", ")
+        }),
         ("strategies".into(), strategies.join(", ")),
         ("max depth".into(), s.max_depth.to_string()),
         ("vrpt".into(), env!("CARGO_PKG_VERSION").into()),

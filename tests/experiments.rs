@@ -222,6 +222,45 @@ fn converge_slopes_on_checker_plane() {
     assert_eq!(c.points.len(), 15);
 }
 
+/// Issue 24: no run uses a seed whose samples the reference holds. A reference rendered with
+/// seed 2 (the independent sampler, the same spp as the runs: a run of seed 2 would be the
+/// reference itself, MSE 0) makes the runs from seed 1 take seeds 1, 3, 4, 5; a merged
+/// reference of seeds 1 and 2 makes them 3, 4, 5, 6; and settings built by hand that would
+/// reuse seed 2 are refused by `compare`.
+#[test]
+fn runs_never_reuse_the_references_seeds() {
+    use vrpt::analysis::experiments::ExperimentSettings;
+    let scene = common::shipped("checker-plane");
+    let st = Strategy::parse("independent+cosine+bsdf").unwrap();
+    let settings = |seed: u64, first_sample: u32| RenderSettings {
+        width: 8,
+        height: 6,
+        spp: 4,
+        first_sample,
+        max_depth: 2,
+        seed,
+        strategy: st,
+        ..Default::default()
+    };
+    let r2 = common::as_image(&scene, &settings(2, 0));
+    let path = std::path::Path::new("ref.exr");
+    let s = ExperimentSettings::for_reference(&scene, &r2, path, 1, 4, None).unwrap();
+    assert_eq!(s.run_seeds(), [1, 3, 4, 5]);
+    let c = compare(&scene, &r2, &[st], 4, None, &s, &Silent).unwrap();
+    assert!(c.rows[0].mse > 0.0);
+    let r1 = common::as_image(&scene, &settings(1, 4));
+    let (merged, _) = merge(&[input("r1", &r1), input("r2", &r2)]).unwrap();
+    let s = ExperimentSettings::for_reference(&scene, &merged, path, 1, 4, None).unwrap();
+    assert_eq!(s.run_seeds(), [3, 4, 5, 6]);
+    let by_hand = ExperimentSettings {
+        reference_seeds: Vec::new(),
+        seed: 1,
+        ..s.clone()
+    };
+    let e = compare(&scene, &r2, &[st], 4, None, &by_hand, &Silent).unwrap_err();
+    assert!(e.to_string().contains("seed 2"), "{e}");
+}
+
 /// A merge input made in memory, named `name`.
 fn input(name: &str, image: &RgbImage) -> MergeInput {
     MergeInput {

@@ -1,4 +1,9 @@
-//! Experiments over strategies, each run an independent render (seed `seed + run`):
+//! Experiments over strategies, each run an independent render. Run k uses the k-th seed from
+//! `seed` upward that the reference does not hold ([`ExperimentSettings::run_seeds`]): a run
+//! that shared the reference's random numbers (the same samples for the independent sampler, a
+//! prefix for Sobol, the same decisions under other strategies) would look closer to it than
+//! it is, and make the bias test weaker.
+//!
 //!
 //! - [`compare`]: every strategy at the same spp (or the same wall time per run) over K runs;
 //!   per strategy the mean time, the mean MSE / relMSE / RMSE / MAE of a run against the
@@ -29,8 +34,10 @@ pub struct ExperimentSettings {
     pub width: u32,
     pub height: u32,
     pub max_depth: u32,
-    /// Run k uses seed `seed + k`.
+    /// The first seed of the runs (see [`ExperimentSettings::run_seeds`]).
     pub seed: u64,
+    /// The seeds whose samples the reference holds (from its metadata): no run uses them.
+    pub reference_seeds: Vec<u64>,
     pub runs: u32,
     pub threads: Option<usize>,
     /// Parts of the image whose metrics `compare` also reports on their own.
@@ -63,6 +70,17 @@ impl ExperimentSettings {
         threads: Option<usize>,
     ) -> Result<ExperimentSettings> {
         let meta = RenderMetadata::radiance(reference, path)?;
+        let reference_seeds = match &meta {
+            None => Vec::new(),
+            Some(m) if m.seed.is_none() && m.merged_seeds.is_empty() => {
+                return Err(Error::Settings(format!(
+                    "reference {}: a merge that does not record its inputs' seeds (made by an \
+                     older vrpt), so the runs could reuse its samples: merge it again",
+                    path.display()
+                )))
+            }
+            Some(m) => m.seeds(),
+        };
         let max_depth = meta.as_ref().map_or_else(
             || {
                 scene
@@ -77,12 +95,24 @@ impl ExperimentSettings {
             height: reference.height,
             max_depth,
             seed,
+            reference_seeds,
             runs,
             threads,
             regions: Vec::new(),
         };
         check_reference(scene, reference, &s)?;
         Ok(s)
+    }
+}
+
+impl ExperimentSettings {
+    /// The seeds of the runs: the first `runs` seeds from `seed` upward that are not among
+    /// `reference_seeds`, so no run shares the reference's random numbers.
+    pub fn run_seeds(&self) -> Vec<u64> {
+        (self.seed..)
+            .filter(|s| !self.reference_seeds.contains(s))
+            .take(self.runs as usize)
+            .collect()
     }
 }
 
@@ -108,6 +138,18 @@ pub fn check_reference(scene: &Scene, reference: &RgbImage, s: &ExperimentSettin
              render the reference again",
             meta.scene_hash_hex(),
             scene.hash
+        )));
+    }
+    let shared: Vec<u64> = s
+        .run_seeds()
+        .into_iter()
+        .filter(|x| meta.seeds().contains(x))
+        .collect();
+    if !shared.is_empty() {
+        return Err(err(format!(
+            "holds the samples of seed {}, which a run would use too: give the runs other seeds \
+             (ExperimentSettings::for_reference skips the reference's)",
+            shared[0]
         )));
     }
     if meta.max_depth != s.max_depth {
@@ -204,13 +246,13 @@ pub fn compare(
             let mut runs: Vec<Vec<Vec3>> = Vec::new();
             let (mut secs, mut spps, mut ms) = (Vec::new(), Vec::new(), Vec::<Metrics>::new());
             let mut region_ms: Vec<Vec<Metrics>> = vec![Vec::new(); s.regions.len()];
-            for k in 0..s.runs {
+            for (k, seed) in s.run_seeds().into_iter().enumerate() {
                 let max_spp = if equal_time.is_some() {
                     u32::MAX / 2
                 } else {
                     spp
                 };
-                let settings = run_settings(st, s, max_spp, k);
+                let settings = run_settings(st, s, max_spp, seed);
                 let plan = PassPlan {
                     pass_spp: Some(spp),
                     time_limit: equal_time,
@@ -287,14 +329,14 @@ pub fn compare(
 }
 
 /// The render settings of run `k` of strategy `st`, on the job's thread pool.
-fn run_settings(st: &Strategy, s: &ExperimentSettings, spp: u32, k: u32) -> RenderSettings {
+fn run_settings(st: &Strategy, s: &ExperimentSettings, spp: u32, seed: u64) -> RenderSettings {
     RenderSettings {
         width: s.width,
         height: s.height,
         spp,
         first_sample: 0,
         max_depth: s.max_depth,
-        seed: s.seed + k as u64,
+        seed,
         strategy: *st,
         threads: None,
         time_traces: false,
@@ -370,8 +412,8 @@ pub fn converge(
             let (mut ys, mut rs) = (Vec::new(), Vec::new());
             for &spp in spps {
                 let (mut mse, mut rel, mut secs) = (0.0, 0.0, 0.0);
-                for k in 0..s.runs {
-                    let settings = run_settings(st, s, spp, k);
+                for (k, seed) in s.run_seeds().into_iter().enumerate() {
+                    let settings = run_settings(st, s, spp, seed);
                     let r = render_passes(scene, &settings, &PassPlan::default(), &NoProgress)?;
                     let (film, stats) = (r.film, r.stats);
                     let img = film.mean_image();

@@ -80,6 +80,7 @@ pub fn experiment_settings(w: u32, h: u32, max_depth: u32, runs: u32) -> Experim
         height: h,
         max_depth,
         seed: seed(1),
+        reference_seeds: Vec::new(),
         runs,
         threads: None,
         regions: Vec::new(),
