@@ -190,7 +190,9 @@ fn cornell_box_with_mis_every_stratifying_sampler_beats_independent() {
             height: h,
             spp: 32768,
             max_depth: 8,
-            seed: common::seed(9),
+            // far from the runs' seeds (from common::seed(1)): seed 9 was run 8's too, which
+            // compare now refuses (issue 24)
+            seed: common::seed(900_000),
             ..Default::default()
         },
     );
