@@ -46,7 +46,7 @@ pub enum Directions {
 
 impl std::fmt::Display for Directions {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&crate::strategy::value_name(self))
+        f.write_str(&crate::names::value_name(self))
     }
 }
 

@@ -260,7 +260,7 @@ fn check_exr_size(path: &Path) -> Result<()> {
                 "its header declares {w}x{hgt} pixels, more than a {bytes}-byte file can hold"
             )));
         }
-        crate::render::check_memory(
+        crate::limits::check_memory(
             w.min(u32::MAX as u64) as u32,
             hgt.min(u32::MAX as u64) as u32,
         )

@@ -19,14 +19,11 @@
 //! the selection probability. [`Lights::light_of`] maps a BVH-order primitive to its light, so a
 //! BSDF-sampled ray that hits an emitter finds the light pdf of the same path for MIS.
 
-use crate::accel::Accel;
-use crate::material::Material;
 use crate::math::Frame;
 use crate::sampling::{
     cosine_hemisphere_pdf, sample_cosine_hemisphere, sample_uniform_triangle, uniform_triangle_pdf,
     Discrete,
 };
-use crate::scene::TriShading;
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
 
@@ -45,7 +42,7 @@ pub enum LightStrategy {
 
 impl std::fmt::Display for LightStrategy {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&crate::strategy::value_name(self))
+        f.write_str(&crate::names::value_name(self))
     }
 }
 
@@ -65,6 +62,20 @@ pub struct TriangleLight {
     pub area: f32,
     /// Emitted radiance on the front side.
     pub emission: Vec3,
+}
+
+impl TriangleLight {
+    /// The emissive triangle `v` (BVH-order primitive `prim`) of front radiance `emission`.
+    pub fn new(prim: u32, v: [Vec3; 3], emission: Vec3) -> TriangleLight {
+        let c = (v[1] - v[0]).cross(v[2] - v[0]);
+        TriangleLight {
+            prim,
+            v,
+            n: c.normalize_or_zero(),
+            area: 0.5 * c.length(),
+            emission,
+        }
+    }
 }
 
 /// A sampled light direction.
@@ -100,33 +111,18 @@ pub fn luminance(c: Vec3) -> f32 {
 }
 
 impl Lights {
-    /// The emissive triangles among `shading` (BVH order) with their materials, and the
-    /// environment of radiance `environment` lighting a scene of bounding radius `radius`.
-    /// Err with more than 2²⁴ emitters (see [`Discrete`]).
+    /// The lights of a scene of `primitives` triangles: the emissive `triangles` (each
+    /// knowing its BVH-order primitive), and the environment of radiance `environment` lighting
+    /// a scene of bounding radius `radius`. Err with more than 2²⁴ emitters (see [`Discrete`]).
     pub fn build(
-        accel: &Accel,
-        shading: &[TriShading],
-        materials: &[Material],
+        triangles: Vec<TriangleLight>,
+        primitives: usize,
         environment: Vec3,
         radius: f32,
     ) -> Result<Lights, String> {
-        let mut triangles = Vec::new();
-        let mut light_index = vec![NO_LIGHT; shading.len()];
-        for (prim, s) in shading.iter().enumerate() {
-            let m = &materials[s.material as usize];
-            if !m.is_emissive() {
-                continue;
-            }
-            let v = accel.vertices(prim as u32);
-            let c = (v[1] - v[0]).cross(v[2] - v[0]);
-            light_index[prim] = triangles.len() as u32;
-            triangles.push(TriangleLight {
-                prim: prim as u32,
-                v,
-                n: c.normalize_or_zero(),
-                area: 0.5 * c.length(),
-                emission: m.emission,
-            });
+        let mut light_index = vec![NO_LIGHT; primitives];
+        for (i, t) in triangles.iter().enumerate() {
+            light_index[t.prim as usize] = i as u32;
         }
         let mut power: Vec<f64> = triangles
             .iter()

@@ -10,9 +10,10 @@ use crate::error::{Error, Result};
 use crate::film::Film;
 use crate::image_io::{write_exr, write_png, Format, RgbImage};
 use crate::lights::LightStrategy;
+use crate::names::{parse_value, value_name};
 use crate::render::{RenderSettings, RenderStats};
 use crate::scene::Scene;
-use crate::strategy::{parse_value, value_name, Strategy};
+use crate::strategy::Strategy;
 use std::collections::BTreeMap;
 use std::path::Path;
 

@@ -156,9 +156,13 @@ impl RenderStats {
     }
 }
 
-/// Something told how much is done (a progress bar), in pixel samples.
+/// Something told how much is done (a progress bar): a render advances it by pixel samples,
+/// an experiment by its units of work, naming each finished piece.
 pub trait Progress: Sync {
-    fn advance(&self, pixel_samples: u64);
+    /// `units` more are done.
+    fn advance(&self, units: u64);
+    /// The piece of work that just finished (e.g. "mis run 3/8").
+    fn finished(&self, _label: &str) {}
 }
 
 /// No progress reporting.
@@ -183,34 +187,6 @@ pub fn with_threads<T: Send>(threads: Option<usize>, f: impl FnOnce() -> T + Sen
     }
 }
 
-/// Bytes a render holds per pixel at its peak: the film's sums (2 × 24 B) and count (8 B), the
-/// tiles' sums before they reach the film (56 B), and the written image's RGB and variance
-/// (2 × 12 B) with the encoder's copy (≤ 24 B).
-pub const BYTES_PER_PIXEL: u64 = 56 + 56 + 24 + 24;
-
-/// Memory the system can still give, from `/proc/meminfo`'s `MemAvailable` (Linux); `None`
-/// where that is not known.
-fn available_memory() -> Option<u64> {
-    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kib * 1024)
-}
-
-/// Refuse an image whose buffers cannot be allocated, before allocating any of them (an
-/// allocation failure aborts the process, with no error line).
-pub fn check_memory(width: u32, height: u32) -> Result<()> {
-    let need = width as u64 * height as u64 * BYTES_PER_PIXEL;
-    match available_memory() {
-        Some(have) if need > have => Err(Error::Settings(format!(
-            "a {width}x{height} image needs about {:.1} GiB of memory; {:.1} GiB are available",
-            need as f64 / (1u64 << 30) as f64,
-            have as f64 / (1u64 << 30) as f64
-        ))),
-        _ => Ok(()),
-    }
-}
-
 /// The camera for `settings`, after checking that the settings can be rendered.
 fn camera_for(scene: &Scene, settings: &RenderSettings) -> Result<Camera> {
     if settings.width == 0 || settings.height == 0 || settings.spp == 0 || settings.max_depth == 0 {
@@ -226,7 +202,7 @@ fn camera_for(scene: &Scene, settings: &RenderSettings) -> Result<Camera> {
             u32::MAX
         )));
     }
-    check_memory(settings.width, settings.height)?;
+    crate::limits::check_memory(settings.width, settings.height)?;
     Camera::new(&scene.camera, settings.width, settings.height).ok_or_else(|| {
         Error::Settings(format!(
             "degenerate camera (eye {}, target {}, up {}, fov {}°)",

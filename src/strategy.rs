@@ -12,34 +12,9 @@
 
 use crate::bsdf::Directions;
 use crate::lights::LightStrategy;
+use crate::names::{parse_value, value_name, value_names};
 use crate::sampler::SamplerKind;
 use clap::ValueEnum;
-
-/// The command-line name of a `ValueEnum` value.
-pub fn value_name<T: ValueEnum>(v: &T) -> String {
-    v.to_possible_value()
-        .map_or_else(String::new, |p| p.get_name().to_string())
-}
-
-/// Parse a `ValueEnum` value by name, with an error that lists the valid names.
-pub fn parse_value<T: ValueEnum>(s: &str, what: &str) -> Result<T, String> {
-    T::from_str(s.trim(), false).map_err(|_| {
-        format!(
-            "unknown {what} '{}' (one of {})",
-            s.trim(),
-            value_names::<T>()
-        )
-    })
-}
-
-/// All names of a `ValueEnum`, comma-separated.
-pub fn value_names<T: ValueEnum>() -> String {
-    T::value_variants()
-        .iter()
-        .map(value_name)
-        .collect::<Vec<_>>()
-        .join(", ")
-}
 
 /// How every random decision of a render is made: one value per axis.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -118,6 +93,48 @@ impl Strategy {
                 None => LightStrategy::Bsdf,
             },
         })
+    }
+
+    /// The strategy of a preset and single axes (the command line's `--strategy`,
+    /// `--sampler`, `--directions`, `--lights`): an axis not given takes the preset's value, or
+    /// the default's without a preset; an axis that contradicts the preset is an error.
+    pub fn from_parts(
+        preset: Option<Preset>,
+        sampler: Option<SamplerKind>,
+        directions: Option<Directions>,
+        lights: Option<LightStrategy>,
+    ) -> Result<Strategy, String> {
+        let Some(preset) = preset else {
+            let d = Strategy::default();
+            return Ok(Strategy {
+                sampler: sampler.unwrap_or(d.sampler),
+                directions: directions.unwrap_or(d.directions),
+                lights: lights.unwrap_or(d.lights),
+            });
+        };
+        let st = preset.strategy();
+        let conflict = |flag: &str, uses: String, asked: String| {
+            format!("--strategy {preset} uses --{flag} {uses}, not --{flag} {asked}")
+        };
+        if let Some(x) = sampler.filter(|&x| x != st.sampler) {
+            return Err(conflict("sampler", st.sampler.to_string(), x.to_string()));
+        }
+        if let Some(x) = directions.filter(|&x| x != st.directions) {
+            let uses = st.directions.to_string();
+            return Err(conflict("directions", uses, x.to_string()));
+        }
+        if let Some(x) = lights.filter(|&x| x != st.lights) {
+            return Err(conflict("lights", st.lights.to_string(), x.to_string()));
+        }
+        Ok(st)
+    }
+
+    /// A comma-separated list of strategies ([`Strategy::parse`] each), or `all`.
+    pub fn parse_list(s: &str) -> Result<Vec<Strategy>, String> {
+        if s.trim() == "all" {
+            return Ok(Strategy::all());
+        }
+        s.split(',').map(Strategy::parse).collect()
     }
 
     /// What `--strategies` accepts, for help texts.

@@ -8,10 +8,11 @@ mod common;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::sync::OnceLock;
-use vrpt::analysis::experiments::{compare, converge, Silent};
+use vrpt::analysis::experiments::{compare, converge};
 use vrpt::analysis::merge::{merge, MergeInput};
 use vrpt::image_io::{read_exr, write_exr, RgbImage};
 use vrpt::output::RenderMetadata;
+use vrpt::render::NoProgress;
 use vrpt::render::RenderSettings;
 use vrpt::sampler::SamplerKind;
 use vrpt::scene::Scene;
@@ -63,7 +64,7 @@ fn compare_presets(
         spp,
         None,
         &common::experiment_settings(w, h, max_depth, 16),
-        &Silent,
+        &NoProgress,
     )
     .unwrap();
     eprint!("{name}\n{}", c.table());
@@ -189,7 +190,7 @@ fn converge_slopes_on_checker_plane() {
         &strategies,
         &[4, 16, 64, 256, 1024],
         &common::experiment_settings(w, h, d, 8),
-        &Silent,
+        &NoProgress,
     )
     .unwrap();
     eprint!("{}", c.table());
@@ -246,7 +247,7 @@ fn runs_never_reuse_the_references_seeds() {
     let path = std::path::Path::new("ref.exr");
     let s = ExperimentSettings::for_reference(&scene, &r2, path, 1, 4, None).unwrap();
     assert_eq!(s.run_seeds(), [1, 3, 4, 5]);
-    let c = compare(&scene, &r2, &[st], 4, None, &s, &Silent).unwrap();
+    let c = compare(&scene, &r2, &[st], 4, None, &s, &NoProgress).unwrap();
     assert!(c.rows[0].mse > 0.0);
     let r1 = common::as_image(&scene, &settings(1, 4));
     let (merged, _) = merge(&[input("r1", &r1), input("r2", &r2)]).unwrap();
@@ -257,7 +258,7 @@ fn runs_never_reuse_the_references_seeds() {
         seed: 1,
         ..s.clone()
     };
-    let e = compare(&scene, &r2, &[st], 4, None, &by_hand, &Silent).unwrap_err();
+    let e = compare(&scene, &r2, &[st], 4, None, &by_hand, &NoProgress).unwrap_err();
     assert!(e.to_string().contains("seed 2"), "{e}");
 }
 

@@ -351,8 +351,9 @@ fn mis_weights_of_both_strategies_sum_to_one() {
 /// can only pull ratios toward 1.
 #[test]
 fn veach_picture_on_the_glossy_plates() {
-    use vrpt::analysis::experiments::{compare, ExperimentSettings, Silent};
+    use vrpt::analysis::experiments::{compare, ExperimentSettings};
     use vrpt::analysis::metrics::Region;
+    use vrpt::render::NoProgress;
     use vrpt::strategy::Strategy;
     let scene = common::shipped("glossy-plates");
     let text =
@@ -396,7 +397,7 @@ fn veach_picture_on_the_glossy_plates() {
         16,
         None,
         &settings,
-        &Silent,
+        &NoProgress,
     )
     .unwrap();
     eprint!("{}", c.table());

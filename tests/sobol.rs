@@ -6,7 +6,8 @@
 mod common;
 
 use glam::{UVec2, Vec2};
-use vrpt::analysis::experiments::{converge, Silent};
+use vrpt::analysis::experiments::converge;
+use vrpt::render::NoProgress;
 use vrpt::render::RenderSettings;
 use vrpt::sampler::{Sampler, SobolSampler};
 use vrpt::stats::{normal_critical_value, sidak};
@@ -155,7 +156,7 @@ fn lit_checker_sobol_beats_padded_strata() {
         &strategies,
         &[4, 16, 64, 256, 1024],
         &common::experiment_settings(w, h, 2, 6),
-        &Silent,
+        &NoProgress,
     )
     .unwrap();
     eprint!("{}", c.table());
@@ -209,7 +210,7 @@ fn cornell_box_with_mis_every_stratifying_sampler_beats_independent() {
             &strategies,
             &spps,
             &common::experiment_settings(w, h, 8, runs),
-            &Silent,
+            &NoProgress,
         )
         .unwrap();
         tables += &c.table();

@@ -21,7 +21,7 @@ use crate::analysis::metrics::{
 use crate::error::{Error, Result};
 use crate::image_io::RgbImage;
 use crate::output::RenderMetadata;
-use crate::render::{render_passes, with_threads, NoProgress, PassPlan, RenderSettings};
+use crate::render::{render_passes, with_threads, NoProgress, PassPlan, Progress, RenderSettings};
 use crate::scene::Scene;
 use crate::strategy::Strategy;
 use glam::Vec3;
@@ -42,19 +42,6 @@ pub struct ExperimentSettings {
     pub threads: Option<usize>,
     /// Parts of the image whose metrics `compare` also reports on their own.
     pub regions: Vec<Region>,
-}
-
-/// Told about each finished render of an experiment (for a progress bar).
-pub trait ExperimentProgress: Sync {
-    /// `label` (strategy, run, spp) finished; `weight` is its share of the whole experiment.
-    fn finished(&self, label: &str, weight: u64);
-}
-
-/// No progress reporting.
-pub struct Silent;
-
-impl ExperimentProgress for Silent {
-    fn finished(&self, _: &str, _: u64) {}
 }
 
 impl ExperimentSettings {
@@ -227,7 +214,7 @@ pub fn compare(
     spp: u32,
     equal_time: Option<Duration>,
     s: &ExperimentSettings,
-    progress: &dyn ExperimentProgress,
+    progress: &dyn Progress,
 ) -> Result<Comparison> {
     check_reference(scene, reference, s)?;
     if strategies.is_empty() || s.runs < 2 || spp == 0 {
@@ -271,7 +258,8 @@ pub fn compare(
                 secs.push(stats.elapsed.as_secs_f64());
                 spps.push(reached as f64);
                 runs.push(img);
-                progress.finished(&format!("{st} run {}/{}", k + 1, s.runs), 1);
+                progress.finished(&format!("{st} run {}/{}", k + 1, s.runs));
+                progress.advance(1);
             }
             for (r, m) in s.regions.iter().zip(&region_ms) {
                 region_rows.push(RegionRow {
@@ -394,7 +382,7 @@ pub fn converge(
     strategies: &[Strategy],
     spps: &[u32],
     s: &ExperimentSettings,
-    progress: &dyn ExperimentProgress,
+    progress: &dyn Progress,
 ) -> Result<Convergence> {
     check_reference(scene, reference, s)?;
     if strategies.is_empty() || spps.len() < 2 || s.runs < 1 || spps.contains(&0) {
@@ -424,10 +412,8 @@ pub fn converge(
                     mse += m.mse;
                     rel += m.rel_mse;
                     secs += stats.elapsed.as_secs_f64();
-                    progress.finished(
-                        &format!("{st} spp {spp} run {}/{}", k + 1, s.runs),
-                        spp as u64,
-                    );
+                    progress.finished(&format!("{st} spp {spp} run {}/{}", k + 1, s.runs));
+                    progress.advance(spp as u64);
                 }
                 let k = s.runs as f64;
                 points.push(ConvergePoint {

@@ -56,16 +56,17 @@ pub enum SamplerKind {
     /// Every number i.i.d. uniform.
     Independent,
     /// Jittered strata per dimension (N strata in 1D, an a×b grid in 2D with a·b = N), visited
-    /// in a hashed order that differs per dimension.
+    /// in a hashed order that differs per dimension; square spp (16, 64, 256) stratify best in
+    /// 2D, a prime spp gives N×1 slabs.
     #[default]
     Stratified,
     /// Owen-scrambled Sobol points (Burley 2020): every dimension of the path jointly
-    /// stratified, one scrambled sequence per pixel.
+    /// stratified, one scrambled sequence per pixel; powers of two stratify best.
     Sobol,
 }
 
 impl std::fmt::Display for SamplerKind {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&crate::strategy::value_name(self))
+        f.write_str(&crate::names::value_name(self))
     }
 }

@@ -19,6 +19,7 @@
 //! ```
 
 use crate::error::{Error, Result};
+use crate::limits::{MAX_DEPTH, MAX_MAGNITUDE, MAX_SIDE};
 use serde::Deserialize;
 use std::path::Path;
 use toml::Spanned;
@@ -75,11 +76,6 @@ pub struct RenderSection {
     pub max_depth: Option<u32>,
 }
 
-/// The largest image side, as `--width` and `--height` allow.
-pub const MAX_SIDE: u32 = 65536;
-/// The longest path, as `--max-depth` allows.
-pub const MAX_DEPTH: u32 = 1024;
-
 impl Description {
     /// Read and parse `path`.
     pub fn load(path: &Path) -> Result<Description> {
@@ -110,7 +106,7 @@ impl Description {
             }
         };
         let coords = |v: &At<[f32; 3]>, field: &str, min: f32| -> Result<(), String> {
-            let m = crate::scene::obj::MAX_MAGNITUDE;
+            let m = MAX_MAGNITUDE;
             match v.get_ref().iter().find(|x| !(min..=m).contains(*x)) {
                 None => Ok(()),
                 Some(x) if !x.is_finite() => {
@@ -124,7 +120,7 @@ impl Description {
             }
         };
         if let Some(c) = &d.camera {
-            let m = crate::scene::obj::MAX_MAGNITUDE;
+            let m = MAX_MAGNITUDE;
             coords(&c.eye, "camera.eye", -m)?;
             coords(&c.target, "camera.target", -m)?;
             coords(&c.up, "camera.up", -m)?;

@@ -16,7 +16,7 @@ use crate::accel::{Accel, Hit};
 use crate::bsdf::Bsdf;
 use crate::camera::CameraDesc;
 use crate::error::{Error, Result};
-use crate::lights::Lights;
+use crate::lights::{Lights, TriangleLight};
 use crate::material::Material;
 use crate::math::hash_words;
 use description::{Description, RenderSection};
@@ -153,12 +153,22 @@ impl Scene {
             }
         });
         let radius = 0.5 * (hi - lo).length();
-        let lights = Lights::build(&accel, &shading, &materials, environment, radius).map_err(
-            |message| Error::Scene {
-                path: source.clone(),
-                message,
-            },
-        )?;
+        let emitters = shading
+            .iter()
+            .enumerate()
+            .filter(|(_, s)| materials[s.material as usize].is_emissive())
+            .map(|(prim, s)| {
+                let emission = materials[s.material as usize].emission;
+                TriangleLight::new(prim as u32, accel.vertices(prim as u32), emission)
+            })
+            .collect();
+        let lights =
+            Lights::build(emitters, shading.len(), environment, radius).map_err(|message| {
+                Error::Scene {
+                    path: source.clone(),
+                    message,
+                }
+            })?;
         let camera = options.camera.unwrap_or_else(|| frame_bounds(lo, hi));
         let hash = content_hash(&mesh, &materials, &camera, environment);
         let extent = lo

@@ -8,6 +8,7 @@
 
 use super::{Mesh, MeshTriangle};
 use crate::error::{clip, Error, Result};
+use crate::limits::MAX_MAGNITUDE;
 use crate::material::Material;
 use glam::{Vec2, Vec3};
 use std::collections::BTreeSet;
@@ -181,10 +182,6 @@ fn mtllib_path(obj: &Path, text: &str) -> Option<PathBuf> {
         .trim();
     Some(obj.parent().unwrap_or(Path::new(".")).join(name))
 }
-
-/// The largest coordinate or emission a scene may hold: squares of it (lengths, sums of
-/// squared radiance) stay finite in f32.
-pub const MAX_MAGNITUDE: f32 = 1e15;
 
 /// Check every line of an OBJ before tobj reads it, so an error names its line: the numbers of
 /// `v`, `vt`, `vn` parse, are finite and (positions) at most [`MAX_MAGNITUDE`]; the indices of

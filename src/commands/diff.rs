@@ -1,0 +1,221 @@
+//! `vrpt diff`: an image against a reference: MSE, relMSE, RMSE, MAE, the mean signed error, the
+//! largest relative difference, where the image records it the variance of its mean and the
+//! bias z-scores, the same per region, and optionally a false-colour error map and a report.
+
+use super::{resolve_regions, Written};
+use crate::analysis::metrics::{
+    image_bias, mean_variance, metrics, region_metrics, ImageBias, Metrics, Region,
+};
+use crate::analysis::plots::write_error_map;
+use crate::analysis::report::{number, Column, Report, Table};
+use crate::error::{Error, Result};
+use crate::image_io::{check_image_path, check_writable, read_exr, RgbImage};
+use crate::output::RenderMetadata;
+use glam::Vec3;
+use std::path::{Path, PathBuf};
+
+/// What to compare, and what to write.
+#[derive(Clone, Debug, Default)]
+pub struct DiffRequest {
+    pub image: PathBuf,
+    pub reference: PathBuf,
+    /// A PNG of the per-pixel relative squared error, with its colour bar.
+    pub error_map: Option<PathBuf>,
+    /// A self-contained HTML report.
+    pub report: Option<PathBuf>,
+    /// Regions reported on their own, and a file of more.
+    pub regions: Vec<Region>,
+    pub regions_file: Option<PathBuf>,
+}
+
+/// The metrics of a diff, and the files written.
+#[derive(Clone, Debug)]
+pub struct DiffOutcome {
+    pub metrics: Metrics,
+    /// The largest `|a − b| / max(|a|, |b|)` over pixels and channels.
+    pub max_relative_difference: f32,
+    /// The image's mean variance of the mean, when it records one.
+    pub variance: Option<f64>,
+    /// The bias z-scores, when the image records its variance.
+    pub bias: Option<ImageBias>,
+    /// Each region's metrics.
+    pub regions: Vec<(String, Metrics)>,
+    pub written: Vec<Written>,
+}
+
+/// The largest `|a − b| / max(|a|, |b|)` over pixels and channels (0 where both are 0): how
+/// far two images are from equal, e.g. a merge of shards and the render of all their samples
+/// (which agree to f32 rounding, a few 1e-7).
+pub fn max_relative_difference(a: &[Vec3], b: &[Vec3]) -> f32 {
+    a.iter()
+        .zip(b)
+        .flat_map(|(x, y)| (0..3).map(move |c| (x[c], y[c])))
+        .map(|(x, y)| {
+            let m = x.abs().max(y.abs());
+            if m > 0.0 {
+                (x - y).abs() / m
+            } else {
+                0.0
+            }
+        })
+        .fold(0.0, f32::max)
+}
+
+/// Read both images, compute the metrics, write what was asked for.
+pub fn run(req: &DiffRequest) -> Result<DiffOutcome> {
+    let a = read_exr(&req.image)?;
+    let r = read_exr(&req.reference)?;
+    RenderMetadata::radiance(&a, &req.image)?;
+    RenderMetadata::radiance(&r, &req.reference)?;
+    if (a.width, a.height) != (r.width, r.height) {
+        return Err(Error::Settings(format!(
+            "{} is {}×{} but {} is {}×{}",
+            req.image.display(),
+            a.width,
+            a.height,
+            req.reference.display(),
+            r.width,
+            r.height
+        )));
+    }
+    if let Some(p) = &req.error_map {
+        check_image_path(p)?;
+    }
+    if let Some(p) = &req.report {
+        check_writable(p)?;
+    }
+    let regions = resolve_regions(&req.regions, req.regions_file.as_deref(), a.width, a.height)?;
+    let mut out = DiffOutcome {
+        metrics: metrics(&a.pixels, &r.pixels),
+        max_relative_difference: max_relative_difference(&a.pixels, &r.pixels),
+        variance: a.variance.as_deref().map(mean_variance),
+        bias: a
+            .variance
+            .as_deref()
+            .map(|v| image_bias(&a.pixels, v, &r.pixels, r.variance.as_deref())),
+        regions: regions
+            .iter()
+            .map(|reg| {
+                let m = region_metrics(&a.pixels, &r.pixels, a.width, reg);
+                (reg.name.clone(), m)
+            })
+            .collect(),
+        written: Vec::new(),
+    };
+    if let Some(p) = &req.report {
+        report(req, &a, &r, &out).write(p)?;
+        out.written.push(Written::new(p));
+    }
+    if let Some(p) = &req.error_map {
+        let (lo, hi) = write_error_map(p, &a, &r)?;
+        out.written.push(Written {
+            path: p.clone(),
+            note: format!("relative squared error, log scale {lo:.1e}..{hi:.1e}"),
+        });
+    }
+    Ok(out)
+}
+
+impl DiffOutcome {
+    /// The metrics as `vrpt diff` prints them.
+    pub fn table(&self) -> String {
+        let m = &self.metrics;
+        let mut t = format!("MSE                {:.6e}\n", m.mse);
+        t += &format!("relMSE (eps 0.01)  {:.6e}\n", m.rel_mse);
+        t += &format!("RMSE               {:.6e}\n", m.rmse);
+        t += &format!("MAE                {:.6e}\n", m.mae);
+        t += &format!("mean signed error  {:+.6e}\n", m.mean_signed_error);
+        t += &format!(
+            "max relative difference {:.3e}\n",
+            self.max_relative_difference
+        );
+        if let Some(v) = self.variance {
+            t += &format!("variance of mean   {v:.6e}\n");
+        }
+        if let Some(b) = &self.bias {
+            if let Some(z) = b.z {
+                t += &format!("bias z (image)     {z:+.3}\n");
+            }
+            t += &format!("max |z| (pixel)    {:.3}\n", b.max_pixel_z);
+        }
+        if !self.regions.is_empty() {
+            t += &format!(
+                "{:<22} {:>12} {:>12} {:>12} {:>12}\n",
+                "region", "MSE", "relMSE", "RMSE", "MAE"
+            );
+            for (name, m) in &self.regions {
+                t += &format!(
+                    "{:<22} {:>12.4e} {:>12.4e} {:>12.4e} {:>12.4e}\n",
+                    name, m.mse, m.rel_mse, m.rmse, m.mae
+                );
+            }
+        }
+        t
+    }
+}
+
+/// The report of a diff: both images, one table of the whole image and each region, and how
+/// the images were made.
+fn report(req: &DiffRequest, a: &RgbImage, r: &RgbImage, out: &DiffOutcome) -> Report {
+    let row = |name: &str, m: &Metrics| {
+        let mut o = serde_json::Map::new();
+        o.insert("region".into(), name.into());
+        o.insert("mse".into(), number(m.mse));
+        o.insert("rel_mse".into(), number(m.rel_mse));
+        o.insert("rmse".into(), number(m.rmse));
+        o.insert("mae".into(), number(m.mae));
+        o.insert("mean_signed_error".into(), number(m.mean_signed_error));
+        o
+    };
+    let mut rows = vec![row("whole image", &out.metrics)];
+    rows.extend(out.regions.iter().map(|(n, m)| row(n, m)));
+    let table = Table {
+        title: "error against the reference".into(),
+        columns: vec![
+            Column::text("region", "region"),
+            Column::number("mse", "MSE"),
+            Column::number("rel_mse", "relMSE"),
+            Column::number("rmse", "RMSE"),
+            Column::number("mae", "MAE"),
+            Column::number("mean_signed_error", "mean signed error"),
+        ],
+        rows,
+        row_key: "region".into(),
+    };
+    let settings = vec![
+        ("image".into(), describe(a, &req.image)),
+        ("reference".into(), describe(r, &req.reference)),
+        ("size".into(), format!("{}x{}", a.width, a.height)),
+        ("vrpt".into(), env!("CARGO_PKG_VERSION").into()),
+    ];
+    let name = req
+        .image
+        .file_name()
+        .map_or("image".into(), |n| n.to_string_lossy().into_owned());
+    let title = format!(
+        "vrpt diff: {} against {}",
+        req.image.display(),
+        req.reference.display()
+    );
+    Report::for_diff(&name, a, r, table, &title, settings)
+}
+
+/// How an image was made, in one line: its file, spp, strategy, seed and scene hash.
+fn describe(img: &RgbImage, path: &Path) -> String {
+    RenderMetadata::radiance(img, path)
+        .ok()
+        .flatten()
+        .map_or_else(
+            || format!("{} (no vrpt metadata)", path.display()),
+            |m| {
+                format!(
+                    "{} ({} spp, {}, seed {}, scene hash {})",
+                    path.display(),
+                    m.spp,
+                    m.strategy,
+                    m.seed.map_or("merged".into(), |s| s.to_string()),
+                    m.scene_hash_hex()
+                )
+            },
+        )
+}

@@ -1,0 +1,335 @@
+//! `vrpt compare` and `vrpt converge`: load the scene and the reference, run the experiment
+//! ([`crate::analysis::experiments`]), and write what was asked for: CSV, JSON, the PNG grid,
+//! the convergence plots, the HTML report.
+
+use super::{resolve_regions, Written};
+use crate::analysis::experiments::{
+    compare, converge, write_csv, Comparison, Convergence, ExperimentSettings,
+};
+use crate::analysis::metrics::Region;
+use crate::analysis::plots::{convergence_svg, write_comparison_grid, write_convergence_plot};
+use crate::analysis::report::Report;
+use crate::error::{Error, Result};
+use crate::image_io::{check_image_path, check_writable, read_exr, write_bytes, RgbImage};
+use crate::output::RenderMetadata;
+use crate::render::Progress;
+use crate::scene::{self, Scene};
+use crate::strategy::Strategy;
+use std::path::PathBuf;
+use std::time::Duration;
+
+/// What both experiments share: the scene, the reference, the strategies and runs, and the
+/// files to write.
+#[derive(Clone, Debug, Default)]
+pub struct ExperimentRequest {
+    pub scene: PathBuf,
+    /// An EXR from `vrpt render` or `vrpt merge` (its size and max depth are used).
+    pub reference: PathBuf,
+    pub strategies: Vec<Strategy>,
+    pub runs: u32,
+    /// The first seed of the runs ([`ExperimentSettings::run_seeds`]).
+    pub seed: u64,
+    pub threads: Option<usize>,
+    pub csv: Option<PathBuf>,
+    pub json: Option<PathBuf>,
+    pub report: Option<PathBuf>,
+}
+
+/// `vrpt compare`: the strategies at equal spp, or at equal time per run.
+#[derive(Clone, Debug, Default)]
+pub struct CompareRequest {
+    pub experiment: ExperimentRequest,
+    /// Samples per pixel of each run (with `equal_time`: per pass).
+    pub spp: u32,
+    /// Seconds per run instead of a fixed spp.
+    pub equal_time: Option<f64>,
+    /// A PNG grid of each strategy's first run and error map.
+    pub grid: Option<PathBuf>,
+    /// Exposure of the grid's images, in stops.
+    pub exposure: f32,
+    /// Regions reported on their own, and a file of more.
+    pub regions: Vec<Region>,
+    pub regions_file: Option<PathBuf>,
+}
+
+/// `vrpt converge`: each strategy at each spp, from scratch.
+#[derive(Clone, Debug, Default)]
+pub struct ConvergeRequest {
+    pub experiment: ExperimentRequest,
+    /// At least two sample counts.
+    pub spp: Vec<u32>,
+    /// Log-log plots of MSE against spp, `.svg` or `.png`.
+    pub plots: Vec<PathBuf>,
+}
+
+/// An experiment ready to run: the scene and reference loaded and checked, the outputs checked.
+pub struct Prepared<R> {
+    pub request: R,
+    pub scene: Scene,
+    pub reference: RgbImage,
+    pub settings: ExperimentSettings,
+}
+
+/// What an experiment made.
+pub struct Outcome<T> {
+    pub result: T,
+    /// The result as the binary prints it (`Comparison::table`, `Convergence::table`).
+    pub table: String,
+    pub written: Vec<Written>,
+}
+
+/// A prepared experiment, whichever it is: its scene, its work, and running it.
+pub trait Experiment {
+    type Result;
+    /// The scene loaded (its warnings are for the user).
+    fn scene(&self) -> &Scene;
+    /// Units of work for a progress bar.
+    fn work(&self) -> u64;
+    /// Run it and write its files.
+    fn run(self, progress: &dyn Progress) -> Result<Outcome<Self::Result>>;
+}
+
+fn prepare_common(a: &ExperimentRequest) -> Result<(Scene, RgbImage, ExperimentSettings)> {
+    for p in [&a.csv, &a.json, &a.report].into_iter().flatten() {
+        check_writable(p)?;
+    }
+    if a.strategies.is_empty() {
+        return Err(Error::Settings("no strategies to run".into()));
+    }
+    let scene = scene::load(&a.scene)?;
+    let reference = read_exr(&a.reference)?;
+    let s = ExperimentSettings::for_reference(
+        &scene,
+        &reference,
+        &a.reference,
+        a.seed,
+        a.runs,
+        a.threads,
+    )?;
+    Ok((scene, reference, s))
+}
+
+/// Write the rows as CSV and `json` as JSON where asked; the files written.
+fn write_tables<R: serde::Serialize, J: serde::Serialize>(
+    a: &ExperimentRequest,
+    rows: &[R],
+    json: &J,
+) -> Result<Vec<Written>> {
+    let mut written = Vec::new();
+    if let Some(p) = &a.csv {
+        write_csv(p, rows)?;
+        written.push(Written::new(p));
+    }
+    if let Some(p) = &a.json {
+        let text = serde_json::to_string_pretty(json).expect("plain data serializes");
+        write_bytes(p, text.as_bytes())?;
+        written.push(Written::new(p));
+    }
+    Ok(written)
+}
+
+/// How an experiment was made, for its report: scene, scene hash, reference, size, (the caller
+/// inserts the spp or time at 4), runs, seeds, strategies, max depth, vrpt version.
+fn settings_list<R>(p: &Prepared<R>, a: &ExperimentRequest) -> Vec<(String, String)> {
+    let reference_meta = RenderMetadata::radiance(&p.reference, &a.reference)
+        .ok()
+        .flatten()
+        .map_or_else(
+            || "no vrpt metadata".into(),
+            |m| format!("{} spp, {}", m.spp, m.strategy),
+        );
+    let strategies: Vec<String> = a.strategies.iter().map(|s| s.to_string()).collect();
+    let seeds: Vec<String> = p.settings.run_seeds().iter().map(u64::to_string).collect();
+    let s = &p.settings;
+    vec![
+        ("scene".into(), a.scene.display().to_string()),
+        ("scene hash".into(), format!("{:016x}", p.scene.hash)),
+        (
+            "reference".into(),
+            format!("{} ({reference_meta})", a.reference.display()),
+        ),
+        ("size".into(), format!("{}x{}", s.width, s.height)),
+        ("runs".into(), a.runs.to_string()),
+        ("seeds".into(), seeds.join(", ")),
+        ("strategies".into(), strategies.join(", ")),
+        ("max depth".into(), s.max_depth.to_string()),
+        ("vrpt".into(), env!("CARGO_PKG_VERSION").into()),
+    ]
+}
+
+impl CompareRequest {
+    /// Check the outputs, load the scene and the reference, resolve the regions.
+    pub fn prepare(self) -> Result<Prepared<CompareRequest>> {
+        if let Some(g) = &self.grid {
+            check_image_path(g)?;
+        }
+        let (scene, reference, mut settings) = prepare_common(&self.experiment)?;
+        settings.regions = resolve_regions(
+            &self.regions,
+            self.regions_file.as_deref(),
+            settings.width,
+            settings.height,
+        )?;
+        Ok(Prepared {
+            request: self,
+            scene,
+            reference,
+            settings,
+        })
+    }
+}
+
+impl Experiment for Prepared<CompareRequest> {
+    type Result = Comparison;
+
+    fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    /// One unit per run.
+    fn work(&self) -> u64 {
+        let a = &self.request.experiment;
+        a.strategies.len() as u64 * a.runs as u64
+    }
+
+    fn run(self, progress: &dyn Progress) -> Result<Outcome<Comparison>> {
+        let (req, a) = (&self.request, &self.request.experiment);
+        let c = compare(
+            &self.scene,
+            &self.reference,
+            &a.strategies,
+            req.spp,
+            req.equal_time.map(Duration::from_secs_f64),
+            &self.settings,
+            progress,
+        )?;
+        let mut written = write_tables(a, &c.rows, &c)?;
+        if let Some(p) = &req.grid {
+            write_comparison_grid(p, &c, &self.reference, req.exposure)?;
+            written.push(Written::new(p));
+        }
+        if let Some(p) = &a.report {
+            // the budget of a run: its settings row and the title's words
+            let (key, value, budget) = match req.equal_time {
+                Some(t) => (
+                    "time per run",
+                    format!("{t} s (passes of {} spp)", req.spp),
+                    format!("{t} s per run"),
+                ),
+                None => (
+                    "spp per run",
+                    req.spp.to_string(),
+                    format!("{} spp per run", req.spp),
+                ),
+            };
+            let mut settings = settings_list(&self, a);
+            settings.insert(4, (key.into(), value));
+            let names: Vec<String> = self
+                .settings
+                .regions
+                .iter()
+                .map(|r| r.name.clone())
+                .collect();
+            let title = format!(
+                "vrpt compare: {}, {budget}, {} runs",
+                a.scene.display(),
+                a.runs
+            );
+            Report::for_comparison(&c, &self.reference, &names, &title, settings)?.write(p)?;
+            written.push(Written::new(p));
+        }
+        Ok(Outcome {
+            table: c.table(),
+            result: c,
+            written,
+        })
+    }
+}
+
+impl ConvergeRequest {
+    /// Check the outputs and the sample counts, load the scene and the reference.
+    pub fn prepare(self) -> Result<Prepared<ConvergeRequest>> {
+        for p in &self.plots {
+            check_writable(p)?;
+            let ok = p
+                .extension()
+                .and_then(|e| e.to_str())
+                .is_some_and(|e| e.eq_ignore_ascii_case("svg") || e.eq_ignore_ascii_case("png"));
+            if !ok {
+                return Err(Error::Write {
+                    path: p.clone(),
+                    message: "a plot is written as .svg or .png".into(),
+                });
+            }
+        }
+        if self.spp.len() < 2 {
+            return Err(Error::Settings(
+                "--spp needs at least two sample counts".into(),
+            ));
+        }
+        let (scene, reference, settings) = prepare_common(&self.experiment)?;
+        Ok(Prepared {
+            request: self,
+            scene,
+            reference,
+            settings,
+        })
+    }
+}
+
+impl Experiment for Prepared<ConvergeRequest> {
+    type Result = Convergence;
+
+    fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    /// The samples per pixel of every run.
+    fn work(&self) -> u64 {
+        let a = &self.request.experiment;
+        a.strategies.len() as u64
+            * a.runs as u64
+            * self.request.spp.iter().map(|&x| x as u64).sum::<u64>()
+    }
+
+    fn run(self, progress: &dyn Progress) -> Result<Outcome<Convergence>> {
+        let (req, a) = (&self.request, &self.request.experiment);
+        let c = converge(
+            &self.scene,
+            &self.reference,
+            &a.strategies,
+            &req.spp,
+            &self.settings,
+            progress,
+        )?;
+        let mut written = write_tables(a, &c.points, &c)?;
+        let name = self
+            .scene
+            .source
+            .file_stem()
+            .map_or("scene".into(), |s| s.to_string_lossy().into_owned());
+        let plot_title = format!("{name}: MSE against spp ({} runs each)", self.settings.runs);
+        for p in &req.plots {
+            write_convergence_plot(p, &c, &plot_title)?;
+            written.push(Written::new(p));
+        }
+        if let Some(p) = &a.report {
+            let mut settings = settings_list(&self, a);
+            let spps: Vec<String> = req.spp.iter().map(u32::to_string).collect();
+            settings.insert(4, ("spp".into(), spps.join(", ")));
+            let title = format!(
+                "vrpt converge: {} ({} runs each)",
+                a.scene.display(),
+                a.runs
+            );
+            let svg = convergence_svg(&c, &plot_title)?;
+            Report::for_convergence(&c, &self.reference, &title, settings, svg)?.write(p)?;
+            written.push(Written::new(p));
+        }
+        Ok(Outcome {
+            table: c.table(),
+            result: c,
+            written,
+        })
+    }
+}

@@ -1,0 +1,58 @@
+//! What each command of the `vrpt` binary does, as library functions: a typed request in, a
+//! typed outcome out, no printing. A command is prepared first (inputs read and checked, output
+//! paths checked, the scene loaded: its warnings can be shown before the long part), then run.
+//! The binary (`src/cli.rs`) only turns flags into requests, shows progress and prints outcomes;
+//! tests call these functions directly.
+//!
+//! - [`render`]: a scene to an EXR or PNG, in passes, shards, under a time limit or a stop flag;
+//! - [`merge`]: renders of the same scene and settings into one image;
+//! - [`diff`]: an image against a reference: metrics, regions, error map, report;
+//! - [`experiment`]: `compare` and `converge`, with their CSV, JSON, grid, plots and report.
+
+pub mod diff;
+pub mod experiment;
+pub mod merge;
+pub mod render;
+
+use crate::analysis::metrics::Region;
+use crate::error::{Error, Result};
+use std::path::{Path, PathBuf};
+
+/// Regions given on the command line and in a file of `NAME X,Y,W,H` lines, checked against a
+/// `width × height` image: what `diff` and `compare` report on their own.
+pub fn resolve_regions(
+    given: &[Region],
+    file: Option<&Path>,
+    width: u32,
+    height: u32,
+) -> Result<Vec<Region>> {
+    let mut all = given.to_vec();
+    if let Some(p) = file {
+        let text = crate::error::read_text(p)?;
+        all.extend(Region::parse_list(&text).map_err(|message| Error::Scene {
+            path: p.to_path_buf(),
+            message,
+        })?);
+    }
+    for r in &all {
+        r.check(width, height).map_err(Error::Settings)?;
+    }
+    Ok(all)
+}
+
+/// A file a command wrote, and what it holds (for the binary to say so).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Written {
+    pub path: PathBuf,
+    /// What else to say of it, e.g. an error map's colour range; may be empty.
+    pub note: String,
+}
+
+impl Written {
+    fn new(path: &Path) -> Written {
+        Written {
+            path: path.to_path_buf(),
+            note: String::new(),
+        }
+    }
+}

@@ -1,0 +1,217 @@
+//! `vrpt render`: load a scene, render it with the settings asked for (flags over the scene's
+//! `[render]` defaults over the built-in ones), in passes, a shard, under a time limit or a stop
+//! flag, and write the image (EXR with metadata, or PNG) and, if asked, the variance image.
+
+use crate::error::{Error, Result};
+use crate::image_io::{check_image_path, Format};
+use crate::output::{write_render, RenderMetadata};
+use crate::render::{render_passes, shard_range, PassPlan, Progress, RenderSettings, RenderStats};
+use crate::scene::{self, Scene};
+use crate::strategy::Strategy;
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::AtomicBool;
+use std::time::{Duration, Instant};
+
+/// What to render and where to write it; `None` takes the scene's default, then the built-in.
+#[derive(Clone, Debug, Default)]
+pub struct RenderRequest {
+    /// An `.obj`, a `scene.toml`, or a folder holding a `scene.toml`.
+    pub scene: PathBuf,
+    /// `.png` or `.exr`; default `SCENE-NAME.png` in the current folder ([`default_output`]).
+    pub output: Option<PathBuf>,
+    pub width: Option<u32>,
+    pub height: Option<u32>,
+    pub spp: Option<u32>,
+    pub max_depth: Option<u32>,
+    pub seed: u64,
+    pub first_sample: u32,
+    pub strategy: Strategy,
+    /// Worker threads; `None`: all cores.
+    pub threads: Option<usize>,
+    /// Stop at the first whole pass that ends after this many seconds.
+    pub time_limit: Option<f64>,
+    /// Samples per pixel per pass (default: all in one pass, or 16 with a time limit).
+    pub pass_spp: Option<u32>,
+    /// Render only shard `i` of `n`.
+    pub shard: Option<(u32, u32)>,
+    /// Exposure of a PNG, in stops.
+    pub exposure: f32,
+    /// Also write the variance of the mean to this EXR.
+    pub variance: Option<PathBuf>,
+    /// Time the traversals ([`RenderStats::timing`]).
+    pub time_traces: bool,
+    /// A flag that stops the render after its current batch (set by a signal handler).
+    pub stop: Option<&'static AtomicBool>,
+}
+
+/// A render ready to run: the scene loaded, the settings and passes resolved, the outputs
+/// checked.
+pub struct PreparedRender {
+    pub scene: Scene,
+    pub settings: RenderSettings,
+    pub plan: PassPlan,
+    pub output: PathBuf,
+    /// Wall time of loading the scene (the BVH build included).
+    pub load_time: Duration,
+    /// The samples this render takes (relative to its first sample): all, or its shard's.
+    pub samples: Range<u32>,
+    exposure: f32,
+    variance: Option<PathBuf>,
+    time_limit: Option<f64>,
+    shard: Option<(u32, u32)>,
+}
+
+/// What a render did.
+pub struct RenderOutcome {
+    pub output: PathBuf,
+    /// The settings, with the spp and first sample actually rendered.
+    pub settings: RenderSettings,
+    pub stats: RenderStats,
+    /// The spp asked for (the shard's, for a shard).
+    pub requested_spp: u32,
+    /// Whether the stop flag ended it before all its samples.
+    pub interrupted: bool,
+    /// The scene, the speed and the rays, in three lines ([`RenderStats::summary`]).
+    pub summary: String,
+    /// Where the time went ([`RenderStats::timing`]).
+    pub timing: String,
+}
+
+/// `SCENE-NAME.png` in the current folder (`render.png` for a bare `scene.toml`).
+pub fn default_output(scene_path: &Path) -> PathBuf {
+    let stem = if scene_path.is_dir() {
+        scene_path.file_name()
+    } else {
+        scene_path.file_stem()
+    };
+    let stem = stem.map_or("render".into(), |s| s.to_string_lossy().into_owned());
+    let stem = if stem == "scene" {
+        "render".into()
+    } else {
+        stem
+    };
+    PathBuf::from(format!("{stem}.png"))
+}
+
+impl RenderRequest {
+    /// Check the outputs, load the scene and resolve the settings.
+    pub fn prepare(&self) -> Result<PreparedRender> {
+        let output = self
+            .output
+            .clone()
+            .unwrap_or_else(|| default_output(&self.scene));
+        check_image_path(&output)?;
+        if let Some(v) = &self.variance {
+            if check_image_path(v)? != Format::Exr {
+                return Err(Error::Settings(format!(
+                    "--variance {}: the variance image must be an .exr",
+                    v.display()
+                )));
+            }
+        }
+        let start = Instant::now();
+        let scene = scene::load(&self.scene)?;
+        let load_time = start.elapsed();
+        let d = RenderSettings::for_scene(&scene);
+        let settings = RenderSettings {
+            width: self.width.unwrap_or(d.width),
+            height: self.height.unwrap_or(d.height),
+            spp: self.spp.unwrap_or(d.spp),
+            first_sample: self.first_sample,
+            max_depth: self.max_depth.unwrap_or(d.max_depth),
+            seed: self.seed,
+            strategy: self.strategy,
+            threads: self.threads,
+            time_traces: self.time_traces,
+        };
+        let plan = PassPlan {
+            pass_spp: self
+                .pass_spp
+                .or(self.time_limit.map(|_| 16.min(settings.spp))),
+            time_limit: self.time_limit.map(Duration::from_secs_f64),
+            shard: self.shard,
+            stop: self.stop,
+        };
+        let samples = match self.shard {
+            Some(s) => shard_range(settings.spp, s)?,
+            None => 0..settings.spp,
+        };
+        Ok(PreparedRender {
+            scene,
+            settings,
+            plan,
+            output,
+            load_time,
+            samples,
+            exposure: self.exposure,
+            variance: self.variance.clone(),
+            time_limit: self.time_limit,
+            shard: self.shard,
+        })
+    }
+}
+
+impl RenderOutcome {
+    /// What the user must hear about: dropped non-finite samples, an interrupted render.
+    pub fn warnings(&self) -> Vec<String> {
+        let mut w = Vec::new();
+        if self.stats.nonfinite > 0 {
+            w.push(format!(
+                "{} non-finite radiance samples were dropped (not written into the image)",
+                self.stats.nonfinite
+            ));
+        }
+        if self.interrupted {
+            w.push(format!(
+                "interrupted: wrote {} with the {} of {} spp taken (its metadata says so)",
+                self.output.display(),
+                self.settings.spp,
+                self.requested_spp
+            ));
+        }
+        w
+    }
+}
+
+impl PreparedRender {
+    /// Pixel samples the render will take at most (for a progress bar).
+    pub fn pixel_samples(&self) -> u64 {
+        self.settings.width as u64 * self.settings.height as u64 * self.samples.len() as u64
+    }
+
+    /// Render and write the image(s).
+    pub fn run(self, progress: &dyn Progress) -> Result<RenderOutcome> {
+        let r = render_passes(&self.scene, &self.settings, &self.plan, progress)?;
+        let requested = self.samples.len() as u32;
+        let settings = RenderSettings {
+            spp: r.spp,
+            first_sample: r.first_sample,
+            ..self.settings
+        };
+        let meta = RenderMetadata {
+            pass_spp: self.plan.pass_spp,
+            time_limit_seconds: self.time_limit,
+            shard: self.shard,
+            requested_spp: (r.spp < requested).then_some(requested as u64),
+            interrupted: r.interrupted,
+            ..RenderMetadata::new(&self.scene, &settings, &r.stats)
+        };
+        write_render(
+            &self.output,
+            &r.film,
+            &meta,
+            self.exposure,
+            self.variance.as_deref(),
+        )?;
+        Ok(RenderOutcome {
+            summary: r.stats.summary(&self.scene, &settings),
+            timing: r.stats.timing(self.load_time, self.scene.accel.build_time),
+            output: self.output,
+            settings,
+            stats: r.stats,
+            requested_spp: requested,
+            interrupted: r.interrupted,
+        })
+    }
+}

@@ -1,0 +1,43 @@
+//! The limits of what vrpt accepts, in one place for every reader and flag: magnitudes of scene
+//! numbers, image sides, path lengths, and the memory an image needs. Depends on nothing of the
+//! renderer, so the scene readers, the image reader and the renderer all take them from here.
+
+use crate::error::{Error, Result};
+
+/// The largest coordinate or emission a scene may hold: squares of it (lengths, sums of
+/// squared radiance) stay finite in f32.
+pub const MAX_MAGNITUDE: f32 = 1e15;
+
+/// The largest image side, as `--width` and `--height` allow.
+pub const MAX_SIDE: u32 = 65536;
+
+/// The longest path, as `--max-depth` allows.
+pub const MAX_DEPTH: u32 = 1024;
+
+/// Bytes a render holds per pixel at its peak: the film's sums (2 × 24 B) and count (8 B), the
+/// tiles' sums before they reach the film (56 B), and the written image's RGB, variance and
+/// sample count (28 B) with the encoder's copy (≤ 28 B).
+pub const BYTES_PER_PIXEL: u64 = 56 + 56 + 28 + 28;
+
+/// Memory the system can still give, from `/proc/meminfo`'s `MemAvailable` (Linux); `None`
+/// where that is not known.
+fn available_memory() -> Option<u64> {
+    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
+}
+
+/// Refuse an image whose buffers cannot be allocated, before allocating any of them (an
+/// allocation failure aborts the process, with no error line).
+pub fn check_memory(width: u32, height: u32) -> Result<()> {
+    let need = width as u64 * height as u64 * BYTES_PER_PIXEL;
+    match available_memory() {
+        Some(have) if need > have => Err(Error::Settings(format!(
+            "a {width}x{height} image needs about {:.1} GiB of memory; {:.1} GiB are available",
+            need as f64 / (1u64 << 30) as f64,
+            have as f64 / (1u64 << 30) as f64
+        ))),
+        _ => Ok(()),
+    }
+}
