@@ -1,0 +1,39 @@
+#!/usr/bin/env bash
+# Make every picture the README shows, into docs/, with the settings written here (one command:
+# `tools/readme_pictures.sh`, from anywhere; about 2 minutes on 2 cores). Run it after a change
+# that alters images, look at the pictures, and commit them: `*.png` is ignored by .gitignore
+# except under docs/, and tests/architecture.rs fails on a README picture that git does not track.
+#
+# The renders use the shipped scenes at their scene.toml sizes and fixed seeds, so a rerun on the
+# same code gives the same files.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+cargo build --release -q
+vrpt=target/release/vrpt
+out=docs
+mkdir -p "$out"
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+
+# Veach's picture (README "Light sampling and MIS"): the glossy plates at 64 spp, stratified
+# points, Phong directions, BSDF sampling / light sampling / MIS.
+for lights in bsdf nee mis; do
+    $vrpt render scenes/glossy-plates --spp 64 --seed 1 -q \
+        --sampler stratified --directions phong --lights "$lights" \
+        -o "$out/glossy-plates-$lights.png"
+done
+
+# The Cornell box at 64 spp: BSDF sampling only (the `combined` preset) and the default.
+$vrpt render scenes/cornell-box --spp 64 --seed 1 -q --strategy combined \
+    -o "$out/cornell-box-bsdf-64spp.png"
+$vrpt render scenes/cornell-box --spp 64 --seed 1 -q -o "$out/cornell-box-mis-64spp.png"
+
+# Sobol against padded strata on lit-checker (README "Stratifying whole paths"): a 16384-spp
+# Sobol reference, then independent / stratified / Sobol with NEE at 4..1024 spp, 4 runs each.
+$vrpt render scenes/lit-checker --spp 16384 --sampler sobol --lights nee --seed 1000 -q \
+    -o "$work/lc-ref.exr"
+$vrpt converge scenes/lit-checker --reference "$work/lc-ref.exr" --runs 4 -q \
+    --strategies independent+cosine+nee,stratified+cosine+nee,sobol+cosine+nee \
+    --spp 4,16,64,256,1024 --plot "$out/lit-checker-converge.png" >/dev/null
+
+ls -l "$out"/*.png
