@@ -215,7 +215,7 @@ fn reference(dir: &Path) -> (PathBuf, String, RgbImage) {
 fn check_expected(
     report: &Path,
     kind: &str,
-    metrics: Vec<Value>,
+    (metrics, summary): (Vec<Value>, Option<Value>),
     (name, shown): (&str, &RgbImage),
     r: &RgbImage,
     pick: fn(usize) -> usize,
@@ -227,6 +227,7 @@ fn check_expected(
         "probe": probe,
         "hover": hover(hx, hy, &[(name, shown), ("reference", r)]),
         "ab": {"a": name, "b": "reference"},
+        "summary": summary,
     });
     check_in_browser(report, &expect, kind);
 }
@@ -246,7 +247,7 @@ fn compare_report_in_a_browser() {
         "--reference",
         &s(&r),
         "--strategies",
-        "mis,combined",
+        "combined,mis",
         "--spp",
         "16",
         "--runs",
@@ -278,9 +279,34 @@ fn compare_report_in_a_browser() {
         }
     }
     assert!(expect_metrics.len() >= 20);
-    check_expected(&report, "compare", expect_metrics, ("mis", &mis), &r, |n| {
-        n / 2
+    // the summary: the strategies by MSE, from the run's JSON; mis is best but listed second,
+    // so opening on it is the summary's doing
+    let mut by_mse: Vec<(String, f64)> = c["rows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| {
+            (
+                r["strategy"].as_str().unwrap().to_string(),
+                r["mse"].as_f64().unwrap(),
+            )
+        })
+        .collect();
+    by_mse.sort_by(|a, b| a.1.total_cmp(&b.1));
+    assert_eq!(by_mse[0].0, "mis");
+    let summary = json!({
+        "key": "mse",
+        "order": by_mse.iter().map(|(n, _)| n.clone()).collect::<Vec<_>>(),
+        "values": by_mse.iter().map(|(n, v)| (n.clone(), json!(v))).collect::<serde_json::Map<_, _>>(),
     });
+    check_expected(
+        &report,
+        "compare",
+        (expect_metrics, Some(summary)),
+        ("mis", &mis),
+        &r,
+        |n| n / 2,
+    );
 }
 
 #[test]
@@ -337,7 +363,7 @@ fn converge_report_in_a_browser() {
     check_expected(
         &report,
         "converge",
-        expect_metrics,
+        (expect_metrics, None),
         ("nee", &nee8),
         &r,
         |_| 0,
@@ -372,9 +398,14 @@ fn diff_report_in_a_browser() {
     .iter()
     .map(|(k, v)| json!({"table": 0, "row": "whole image", "column": k, "value": v}))
     .collect();
-    check_expected(&report, "diff", expect_metrics, ("nee.exr", &a), &r, |n| {
-        n - 1
-    });
+    check_expected(
+        &report,
+        "diff",
+        (expect_metrics, None),
+        ("nee.exr", &a),
+        &r,
+        |n| n - 1,
+    );
 }
 
 /// The same compare run twice gives the same report, but for the measured times and what is

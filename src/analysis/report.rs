@@ -16,7 +16,9 @@
 //!   the 256×256 Cornell box: 2.7 MB instead of 7.4 MB for plain base64;
 //! - `tables[]`: `{title, columns[{key, label, numeric}], rows[{key: value}], row_key}`, numbers
 //!   exact (the page shows 4 significant digits and keeps the exact value in `data-value`);
-//! - `settings`: `[[key, value]]`, how the report was made; `plot_svg`: the convergence plot.
+//! - `settings`: `[[key, value]]`, how the report was made; `plot_svg`: the convergence plot;
+//! - `summary` (compare): what the page opens on, [`Summary`]: the strategies ranked by MSE (or
+//!   by efficiency for equal-time runs), the best one's image beside the reference.
 //!
 //! The payload holds no time or random identifier: the same data give the same file. Inside the
 //! `<script>` tag, `</` is written `<\/` (the same string to JSON) so no value can close it.
@@ -110,6 +112,56 @@ impl Table {
     }
 }
 
+/// The answer a comparison report opens on: its strategies ranked by one column of its first
+/// table, the best first, and the best one's image (shown beside the reference).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Summary {
+    /// The column ranked by: "mse" (equal spp: lower is better) or "efficiency" (equal time:
+    /// higher is better).
+    pub key: String,
+    /// Its words, e.g. "MSE (lower is better)".
+    pub label: String,
+    /// The strategies, best first (rows whose value is not a number last, in table order).
+    pub ranking: Vec<String>,
+    /// The best strategy: the name of one of the report's images.
+    pub best: String,
+}
+
+impl Summary {
+    /// The rows of a comparison ranked by MSE (ascending), or with `by_efficiency` (equal-time
+    /// runs: each run had the same time, so MSE ranks them too, but efficiency says it per
+    /// second) by efficiency (descending).
+    pub fn of(c: &Comparison, by_efficiency: bool) -> Summary {
+        let value = |r: &crate::analysis::experiments::CompareRow| {
+            if by_efficiency {
+                -r.efficiency
+            } else {
+                r.mse
+            }
+        };
+        let mut rows: Vec<_> = c.rows.iter().collect();
+        rows.sort_by(|a, b| match (value(a).is_nan(), value(b).is_nan()) {
+            (false, false) => value(a).total_cmp(&value(b)),
+            (x, y) => x.cmp(&y),
+        });
+        let ranking: Vec<String> = rows.iter().map(|r| r.strategy.clone()).collect();
+        let (key, label) = if by_efficiency {
+            (
+                "efficiency",
+                "efficiency 1/(MSE·time), relative (higher is better)",
+            )
+        } else {
+            ("mse", "MSE (lower is better)")
+        };
+        Summary {
+            key: key.into(),
+            label: label.into(),
+            best: ranking.first().cloned().unwrap_or_default(),
+            ranking,
+        }
+    }
+}
+
 /// Everything a report shows.
 #[derive(Clone, Debug)]
 pub struct Report {
@@ -122,6 +174,8 @@ pub struct Report {
     pub images: Vec<ReportImage>,
     pub tables: Vec<Table>,
     pub plot_svg: Option<String>,
+    /// What the page opens on, for a comparison.
+    pub summary: Option<Summary>,
 }
 
 #[derive(Serialize)]
@@ -143,6 +197,7 @@ struct Payload<'a> {
     images: Vec<ImagePayload<'a>>,
     tables: &'a [Table],
     plot_svg: Option<&'a str>,
+    summary: Option<&'a Summary>,
 }
 
 /// The payload's form of an image: its values as binary16, RGB interleaved, the little-endian
@@ -220,6 +275,7 @@ impl Report {
                 .collect(),
             tables: &self.tables,
             plot_svg: self.plot_svg.as_deref(),
+            summary: self.summary.as_ref(),
         };
         let json = serde_json::to_string(&payload)
             .map_err(|e| Error::Settings(format!("report: {e}")))?
@@ -256,13 +312,14 @@ fn compare_columns() -> Vec<Column> {
 }
 
 impl Report {
-    /// The report of `vrpt compare`: the reference and each strategy's first run, the metrics
-    /// (whole image, then one table per region), and `settings`.
+    /// The report of `vrpt compare`: the summary (ranked by efficiency for `equal_time` runs,
+    /// else by MSE), the reference and each strategy's first run, the metrics (whole image,
+    /// then one table per region), and `settings`.
     pub fn for_comparison(
         c: &Comparison,
         reference: &RgbImage,
         region_names: &[String],
-        title: &str,
+        (title, equal_time): (&str, bool),
         settings: Vec<(String, String)>,
     ) -> Result<Report> {
         let mut images = vec![ReportImage {
@@ -315,6 +372,7 @@ impl Report {
             images,
             tables,
             plot_svg: None,
+            summary: Some(Summary::of(c, equal_time)),
         })
     }
 
@@ -400,6 +458,7 @@ impl Report {
             images,
             tables,
             plot_svg: Some(plot_svg),
+            summary: None,
         })
     }
 
@@ -437,6 +496,7 @@ impl Report {
             ],
             tables: vec![rows],
             plot_svg: None,
+            summary: None,
         }
     }
 }
@@ -489,6 +549,7 @@ mod tests {
             }],
             tables: vec![],
             plot_svg: None,
+            summary: None,
         };
         let html = r.to_html().unwrap();
         assert_eq!(
@@ -502,5 +563,49 @@ mod tests {
             ..r.clone()
         };
         assert!(bad.to_html().is_err());
+    }
+
+    /// The summary ranks by MSE at equal spp and by efficiency at equal time (which differ when
+    /// the strategies' times differ), rows without a number last.
+    #[test]
+    fn the_summary_ranks_by_mse_or_by_efficiency() {
+        use crate::analysis::experiments::CompareRow;
+        let row = |name: &str, mse: f64, efficiency: f64| CompareRow {
+            strategy: name.into(),
+            runs: 2,
+            spp: 16.0,
+            seconds: 1.0,
+            mse,
+            rel_mse: 0.0,
+            rmse: 0.0,
+            mae: 0.0,
+            variance: 0.0,
+            bias_t: 0.0,
+            bias_p: 1.0,
+            mse_reduction: 1.0,
+            efficiency,
+        };
+        let c = Comparison {
+            rows: vec![
+                row("a", 3.0, 1.0),
+                row("b", f64::NAN, f64::NAN),
+                row("c", 1.0, 2.0),
+                row("d", 2.0, 5.0),
+            ],
+            regions: vec![],
+            baseline: "a".into(),
+            images: vec![],
+            variances: vec![],
+            reference_variance: None,
+        };
+        let s = Summary::of(&c, false);
+        assert_eq!(
+            (s.key.as_str(), s.ranking.join(",")),
+            ("mse", "c,d,a,b".into())
+        );
+        assert_eq!(s.best, "c");
+        let s = Summary::of(&c, true);
+        assert_eq!(s.ranking.join(","), "d,c,a,b");
+        assert_eq!(s.best, "d");
     }
 }

@@ -235,7 +235,8 @@ impl Experiment for Prepared<CompareRequest> {
                 a.scene.display(),
                 a.runs
             );
-            Report::for_comparison(&c, &self.reference, &names, &title, settings)?.write(p)?;
+            let how = (title.as_str(), req.equal_time.is_some());
+            Report::for_comparison(&c, &self.reference, &names, how, settings)?.write(p)?;
             written.push(Written::new(p));
         }
         Ok(Outcome {

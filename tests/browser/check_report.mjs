@@ -21,7 +21,9 @@
 //             "values": {"<image name>": [r, g, b], ...},    linear RGB of that pixel (f32 or f64),
 //             "stderr": {"<image name>": [r, g, b], ...}},   its standard error of the mean;
 //       names are of images in the first group (or the reference);
-//   "ab": {"a": "<image name>", "b": "<image name>"}           the two images of the A/B check
+//   "ab": {"a": "<image name>", "b": "<image name>"},          the two images of the A/B check
+//   "summary": {"key": "mse", "order": ["<strategy>", ...],     (compare only) the ranking the page
+//               "values": {"<strategy>": 1.2e-4, ...}}          opens on, best first, and each value
 // }
 //
 // The page contract checked here (src/analysis/report.html): canvas#canvas holds the view at one
@@ -29,7 +31,10 @@
 // range input; #ab, #ab-a, #ab-b, #divide are the A/B controls (image x < divide shows A);
 // #cbar-min/#cbar-max are the colour bar's labels (data-value exact); #inspector holds
 // [data-image][data-kind=value|stderr][data-rgb]; table[data-table=i] cells carry data-row,
-// data-col, data-value. The page sets window.__vrptReady and records errors in __vrptErrors.
+// data-col, data-value; #summary (compare) holds table#summary-table (rows tr[data-row] best
+// first, cells data-col/data-value) and canvas#summary-best / canvas#summary-reference (one
+// canvas pixel per image pixel, exposure 0). The page sets window.__vrptReady and records errors
+// in __vrptErrors.
 import { spawn } from 'node:child_process';
 import { readFileSync, writeFileSync, mkdirSync } from 'node:fs';
 import { createServer } from 'node:net';
@@ -184,6 +189,36 @@ async function run() {
   }
   await screenshot('initial');
   if (!check(IMG.length > 0, 'the report payload holds no images')) return pageErrors();
+
+  // the summary (compare): the page opens on it, above the viewer and in the first screenful;
+  // the ranking's order and values; the best image and the reference drawn from the data; the
+  // viewer starts on the best image
+  if (EXPECT.summary) {
+    const sum = EXPECT.summary, best = byName(sum.order[0]);
+    const box = await js(`const s = document.getElementById('summary'), v = document.getElementById('viewer');
+      return {hidden: s.hidden, top: s.getBoundingClientRect().top, viewer: v.getBoundingClientRect().top, h: window.innerHeight};`);
+    check(!box.hidden && box.top < box.viewer && box.top < box.h / 2,
+      `the summary is not what the page opens on: ${JSON.stringify(box)}`);
+    const rows = await js(`return [...document.querySelectorAll('#summary-table tbody tr')].map((tr) => ({row: tr.dataset.row,
+      value: [...tr.cells].find((c) => c.dataset.col === arguments[0])?.dataset.value ?? null}));`, sum.key);
+    check(JSON.stringify(rows.map((r) => r.row)) === JSON.stringify(sum.order),
+      `summary ranking ${rows.map((r) => r.row).join(', ')}, expected ${sum.order.join(', ')}`);
+    for (const r of rows) {
+      check(r.value !== null && relClose(Number(r.value), sum.values[r.row], 1e-9),
+        `summary ${sum.key} of ${r.row}: ${r.value}, expected ${sum.values[r.row]}`);
+    }
+    for (const [id, i] of [['summary-best', best], ['summary-reference', REF]]) {
+      const got = await js(`const c = document.getElementById(arguments[0]);
+        return {index: c.dataset.index, w: c.width, h: c.height, px: Array.from(c.getContext('2d').getImageData(0, 0, c.width, c.height).data)};`, id);
+      if (!check(Number(got.index) === i && got.w === W && got.h === H, `#${id} shows image ${got.index} (${got.w}x${got.h}), not ${i}`)) continue;
+      let bad = 0;
+      for (let p = 0; p < W * H; p++) for (let c = 0; c < 3; c++) if (Math.abs(got.px[4 * p + c] - tone(IMG[i][3 * p + c], 0)) > 1) bad++;
+      check(bad === 0, `#${id}: ${bad} pixel channels differ from ${DATA.images[i].name}'s data`);
+    }
+    check(Number(await js(`return document.getElementById('canvas').dataset.index`)) === best,
+      `the viewer does not open on the best strategy, ${sum.order[0]}`);
+    await screenshot('summary', '#summary');
+  }
 
   // metrics: exact data-value, shown to 4 significant digits
   for (const e of EXPECT.metrics || []) {
