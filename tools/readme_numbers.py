@@ -1,0 +1,247 @@
+#!/usr/bin/env python3
+"""Measure every table the README shows, in one run on one machine, and print them as markdown.
+
+    python3 tools/readme_numbers.py                 # every section (about 25 minutes on 2 cores)
+    python3 tools/readme_numbers.py --only speed,error
+    python3 tools/readme_numbers.py --list
+
+Each section prints a heading, the commands behind it, and its table(s); the README's numbers are
+pasted from one run of this script, and the first section names the machine. Timings are medians
+of interleaved runs (A B A B ...), because the machines here are shared and drift by 30 % within
+minutes. The race against Mitsuba needs `pip install -r tools/peers/requirements.txt`; without
+it that section says so and is skipped.
+"""
+import argparse
+import json
+import os
+import pathlib
+import platform
+import re
+import statistics
+import subprocess
+import sys
+import tempfile
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+VRPT = str(ROOT / "target/release/vrpt")
+WORK = pathlib.Path(tempfile.mkdtemp(prefix="vrpt-numbers-"))
+SECTIONS = {}
+
+
+def section(name):
+    def register(f):
+        SECTIONS[name] = f
+        return f
+    return register
+
+
+def run(args, **kw):
+    r = subprocess.run(args, capture_output=True, text=True, cwd=ROOT, **kw)
+    if r.returncode != 0:
+        sys.exit(f"failed: {' '.join(map(str, args))}\n{r.stderr}")
+    return r
+
+
+def vrpt(*args):
+    return run([VRPT, *map(str, args)])
+
+
+def cached_render(name, *args):
+    """A reference EXR rendered once per run of this script."""
+    path = WORK / f"{name}.exr"
+    if not path.exists():
+        vrpt("render", *args, "-q", "-o", path)
+    return path
+
+
+def compare_json(*args):
+    out = WORK / "compare.json"
+    vrpt("compare", *args, "-q", "--json", out)
+    return json.loads(out.read_text())
+
+
+def converge_json(*args):
+    out = WORK / "converge.json"
+    vrpt("converge", *args, "-q", "--json", out)
+    return json.loads(out.read_text())
+
+
+def table(header, rows):
+    lines = ["| " + " | ".join(header) + " |", "|" + "|".join("---:" if i else "---" for i in range(len(header))) + "|"]
+    lines += ["| " + " | ".join(str(c) for c in r) + " |" for r in rows]
+    return "\n".join(lines)
+
+
+def g(x, d=3):
+    """A number to `d` significant digits, exponent form below 1e-2."""
+    if x is None or (isinstance(x, float) and x != x):
+        return "—"
+    return f"{x:.{d - 1}e}" if abs(x) < 1e-2 and x != 0 else f"{x:.{d}g}"
+
+
+PRESET_LIGHTS = {"independent": "bsdf", "stratified": "bsdf", "importance": "bsdf", "combined": "bsdf",
+                 "nee": "nee", "mis": "mis"}
+
+
+def lights_of(strategy):
+    """The light strategy of a strategy's name (a preset, or SAMPLER+DIRECTIONS+LIGHTS)."""
+    return strategy.split("+")[-1] if "+" in strategy else PRESET_LIGHTS[strategy]
+
+
+def render_speed(scene, strategy, extra=()):
+    """(M samples/s, Mrays/s, rays per sample, (camera, bounce, shadow) per sample) of one render,
+    from its summary lines."""
+    r = vrpt("render", scene, "--strategy" if "+" not in strategy else "--sampler", *strategy_flags(strategy),
+             *extra, "-o", WORK / "speed.exr")
+    text = r.stderr
+    sps = float(re.search(r"([0-9.]+) M samples/s", text).group(1))
+    mrays = float(re.search(r"([0-9.]+) Mrays/s", text).group(1))
+    m = re.search(r"rays: (\d+) \((\d+) camera, (\d+) bounce, (\d+) shadow; ([0-9.]+) per sample\)", text)
+    total, cam, bounce, shadow = (int(m.group(i)) for i in range(1, 5))
+    per = float(m.group(5))
+    n = total / per
+    return sps, mrays, per, (cam / n, bounce / n, shadow / n)
+
+
+def strategy_flags(strategy):
+    if "+" not in strategy:
+        return [strategy]
+    s, d, l = strategy.split("+")
+    return [s, "--directions", d, "--lights", l]
+
+
+@section("machine")
+def machine():
+    cpu = "unknown CPU"
+    flags = ""
+    try:
+        info = pathlib.Path("/proc/cpuinfo").read_text()
+        cpu = re.search(r"model name\s*:\s*(.+)", info).group(1).strip()
+        flags = re.search(r"flags\s*:\s*(.+)", info).group(1).split()
+    except (OSError, AttributeError):
+        pass
+    simd = next((w for w, f in (("AVX-512", "avx512f"), ("AVX2", "avx2"), ("SSE4.2", "sse4_2")) if f in flags), "SSE2")
+    rustc = run(["rustc", "--version"]).stdout.strip()
+    print(f"Measured on {cpu}, {os.cpu_count()} cores, widest SIMD {simd}; {rustc}; "
+          f"{platform.system()} {platform.release()}.")
+
+
+@section("speed")
+def speed():
+    scene = "scenes/cornell-box"
+    strategies = ["combined", "nee", "mis"]
+    print("Cornell box, 256×256, 64 spp, max depth 8, all cores; median of 3 interleaved runs:\n")
+    print(f"`vrpt render {scene} --strategy S -o x.exr`\n")
+    runs = {s: [] for s in strategies}
+    for _ in range(3):
+        for s in strategies:
+            runs[s].append(render_speed(scene, s))
+    rows = []
+    for s in strategies:
+        med = sorted(runs[s], key=lambda r: r[0])[1]
+        sps, mrays, per, (c, b, sh) = med
+        rows.append([s, f"{sps:.2f}", f"{mrays:.2f}", f"{per:.2f} ({c:.0f} + {b:.2f} + {sh:.2f})"])
+    print(table(["strategy", "M samples/s", "Mrays/s", "rays per sample (camera + bounce + shadow)"], rows))
+
+
+@section("error")
+def error():
+    scene = "scenes/cornell-box"
+    ref = cached_render("cb-ref", scene, "--spp", 4096, "--seed", 77)
+    strategies = "combined,nee,mis"
+    print(f"Against a 4096-spp reference (`vrpt render {scene} --spp 4096 --seed 77`); "
+          f"`vrpt compare {scene} --reference cb-ref.exr --strategies {strategies} --spp 64 --runs 4` "
+          "and the same with `--spp 16 --equal-time 2`:\n")
+    a = compare_json(scene, "--reference", ref, "--strategies", strategies, "--spp", 64, "--runs", 4)
+    b = compare_json(scene, "--reference", ref, "--strategies", strategies, "--spp", 16, "--runs", 4,
+                     "--equal-time", 2)
+    rows = []
+    for ra, rb in zip(a["rows"], b["rows"]):
+        rows.append([ra["strategy"], g(ra["mse"]), f"{ra['mse_reduction']:.1f}×", f"{g(rb['mse'])} ({rb['spp']:.0f} spp)",
+                     f"{rb['mse_reduction']:.1f}×"])
+    print(table(["strategy", "MSE at 64 spp", "MSE reduction", "MSE at equal time (2 s)", "reduction at equal time"], rows))
+
+
+@section("veach")
+def veach():
+    scene = "scenes/glossy-plates"
+    ref = cached_render("gp-ref", scene, "--spp", 1024)
+    strategies = "stratified+phong+bsdf,stratified+phong+nee,stratified+phong+mis"
+    print(f"`vrpt compare {scene} --reference gp-ref.exr --spp 16 --runs 8 --strategies {strategies} "
+          f"--regions {scene}/regions.txt` (reference: 1024 spp, MIS):\n")
+    c = compare_json(scene, "--reference", ref, "--spp", 16, "--runs", 8, "--strategies", strategies,
+                     "--regions", f"{scene}/regions.txt")
+    regions = {}
+    for r in c["regions"]:
+        regions.setdefault(r["region"], {})[lights_of(r["strategy"])] = r["mse"]
+    rows = []
+    for n in ("10", "100", "1000", "10000"):
+        row = [f"n = {n}"]
+        for l in range(4):
+            m = regions[f"p{n}-l{l}"]
+            best = min(m.values())
+            row.append(" / ".join(f"**{g(m[k])}**" if m[k] == best else g(m[k]) for k in ("bsdf", "nee", "mis")))
+        rows.append(row)
+    print(table(["plate \\ light", "l0 (smallest) bsdf / nee / mis", "l1", "l2", "l3 (largest)"], rows))
+    whole = {lights_of(r["strategy"]): r["mse"] for r in c["rows"]}
+    print(f"\nWhole image: bsdf {g(whole['bsdf'])}, nee {g(whole['nee'])}, mis {g(whole['mis'])} "
+          f"({whole['bsdf'] / whole['mis']:.1f}× lower than bsdf).")
+
+
+@section("lit-checker")
+def lit_checker():
+    scene = "scenes/lit-checker"
+    ref = cached_render("lc-ref", scene, "--spp", 16384, "--sampler", "sobol", "--lights", "nee", "--seed", 1000)
+    strategies = "independent+cosine+nee,stratified+cosine+nee,sobol+cosine+nee"
+    print(f"`vrpt converge {scene} --reference lc-ref.exr --runs 4 --strategies {strategies} "
+          "--spp 4,16,64,256,1024` (reference: 16384 spp, Sobol, NEE):\n")
+    c = converge_json(scene, "--reference", ref, "--runs", 4, "--strategies", strategies, "--spp", "4,16,64,256,1024")
+    rows = []
+    for s in c["slopes"]:
+        at = {p["spp"]: p["mse"] for p in c["points"] if p["strategy"] == s["strategy"]}
+        rows.append([s["strategy"].split("+")[0], f"{s['mse_slope']:+.2f}", g(at[4]), g(at[64]), g(at[1024])])
+    print(table(["sampler", "MSE slope", "MSE at 4 spp", "at 64", "at 1024"], rows))
+
+
+@section("scaling")
+def scaling():
+    print("`cargo run --release --example scaling`:\n")
+    r = run(["cargo", "run", "--release", "-q", "--example", "scaling"])
+    print(r.stdout.strip())
+
+
+@section("race")
+def race():
+    try:
+        import mitsuba  # noqa: F401
+    except ImportError:
+        print("skipped: `pip install -r tools/peers/requirements.txt` for the race against Mitsuba 3")
+        return
+    print("`python3 tools/peers/mitsuba_race.py`:\n")
+    r = run([sys.executable, "tools/peers/mitsuba_race.py"])
+    print(r.stdout.strip())
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--only", help="comma-separated sections")
+    ap.add_argument("--list", action="store_true")
+    a = ap.parse_args()
+    if a.list:
+        print("\n".join(SECTIONS))
+        return
+    names = a.only.split(",") if a.only else list(SECTIONS)
+    unknown = [n for n in names if n not in SECTIONS]
+    if unknown:
+        sys.exit(f"unknown sections {unknown}; --list shows them")
+    run(["cargo", "build", "--release", "-q"])
+    if "machine" not in names:
+        names.insert(0, "machine")
+    for n in names:
+        print(f"\n### {n}\n", flush=True)
+        SECTIONS[n]()
+        sys.stdout.flush()
+
+
+if __name__ == "__main__":
+    main()
