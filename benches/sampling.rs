@@ -44,6 +44,43 @@ fn samplers(c: &mut Criterion) {
     g.finish();
 }
 
+/// Draws as a render makes them: 64 pixels, each a whole pass of 64 samples of a 4-bounce path
+/// (per-pixel work such as a table build is paid 64 times per iteration, as in a render).
+fn draw_pixels<S: Sampler>(s: &mut S) -> f32 {
+    let mut acc = 0.0;
+    for p in 0..PIXELS {
+        let pixel = UVec2::new(p % 8, p / 8);
+        for i in 0..PASS {
+            s.start_pixel_sample(pixel, i);
+            acc += CameraSample::draw(s).pixel.x;
+            for _ in 0..BOUNCES {
+                let b = BounceSample::draw(s, true);
+                acc += b.lobe + b.direction.y + b.roulette;
+            }
+        }
+    }
+    acc
+}
+
+const PIXELS: u32 = 64;
+const PASS: u32 = 64;
+
+fn samplers_in_pixels(c: &mut Criterion) {
+    let mut g = c.benchmark_group("sampler_draws_per_pixel");
+    g.warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(2))
+        .throughput(Throughput::Elements((PIXELS * PASS) as u64 * DRAWS));
+    let mut ind = IndependentSampler::new(1);
+    g.bench_function("independent", |b| {
+        b.iter(|| black_box(draw_pixels(&mut ind)))
+    });
+    let mut st = StratifiedSampler::new(1, PASS);
+    g.bench_function("stratified", |b| b.iter(|| black_box(draw_pixels(&mut st))));
+    let mut so = SobolSampler::new(1);
+    g.bench_function("sobol", |b| b.iter(|| black_box(draw_pixels(&mut so))));
+    g.finish();
+}
+
 fn warps(c: &mut Criterion) {
     let mut g = c.benchmark_group("warps");
     g.warm_up_time(Duration::from_secs(1))
@@ -84,5 +121,5 @@ fn warps(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, samplers, warps);
+criterion_group!(benches, samplers, samplers_in_pixels, warps);
 criterion_main!(benches);

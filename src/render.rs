@@ -225,12 +225,12 @@ pub fn render(
             origin: settings.first_sample,
             size: settings.spp,
         };
-        let stats = render_range(
+        let range = first..first + settings.spp as u64;
+        let (stats, _) = render_range(
             scene,
             &camera,
             settings,
-            pass,
-            first..first + settings.spp as u64,
+            (pass, range, 0..tile_count(settings), None),
             &mut film,
             progress,
         );
@@ -246,18 +246,21 @@ struct SamplePass {
 }
 
 /// Render the samples `range` (sample indices, all within `pass` and below
-/// [`SAMPLE_INDICES`]) into `film`, going on from the sums it holds, on the current rayon pool,
-/// with the sampler the strategy names.
+/// [`SAMPLE_INDICES`]) of the tiles `tiles` (row-major tile indices) into `film`, going on from
+/// the sums it holds, on the current rayon pool, with the sampler the strategy names. With
+/// `stop`, a tile reads the flag before each pixel (and every 256 samples of one) and ends there
+/// when it is set: the second value says whether some pixel was left out (the film then holds a
+/// partial batch, for the caller to drop).
 fn render_range(
     scene: &Scene,
     camera: &Camera,
     settings: &RenderSettings,
-    pass: SamplePass,
-    range: Range<u64>,
+    (pass, range, tiles, stop): (SamplePass, Range<u64>, Range<u32>, Option<&AtomicBool>),
     film: &mut Film,
     progress: &dyn Progress,
-) -> RenderStats {
+) -> (RenderStats, bool) {
     let seed = settings.seed;
+    let range = (range, tiles, stop);
     match settings.strategy.sampler {
         SamplerKind::Independent => render_with(
             scene,
@@ -304,8 +307,8 @@ pub struct PassPlan {
     pub stop: Option<&'static AtomicBool>,
 }
 
-/// Wall time a batch of samples aims at when a render can be stopped: a stop request waits
-/// about this long.
+/// Wall time the samples that a stopped render takes after the stop aim at (see
+/// [`render_passes`]).
 pub const BATCH_SECONDS: f64 = 0.25;
 
 /// The samples `lo..hi` (relative to the render's first sample) of shard `i` of `n` of a render
@@ -349,10 +352,17 @@ pub fn pass_bounds(done: u64, pass: u64, spp: u64) -> Range<u64> {
 /// Render `settings.spp` samples per pixel as passes of `plan.pass_spp` samples (sample indices
 /// `first_sample + k·pass_spp ..`, a shorter last pass being a set of its own), merging them
 /// exactly; only the samples of `plan.shard`, if given. Stops early at a whole pass when
-/// `plan.time_limit` runs out, and after the current batch when `plan.stop` is set (a partial
-/// pass is still an unbiased estimate: every sample of a stratified or Sobol set is uniform on
-/// its own). Batches go on from the sums of the pass, so the image does not depend on them.
-/// Sample arithmetic is in u64 and the stop flag is read before every batch and every pass.
+/// `plan.time_limit` runs out, and soon after `plan.stop` is set. Sample arithmetic is in u64.
+///
+/// Each pixel renders the samples of a pass in one go, so per-pixel work of the sampler (the
+/// stratified sampler's tables) is done once per pixel and pass. A render that can be stopped
+/// first takes one sample per pixel of a pass (it measures the speed), then the rest of the pass
+/// with the stop flag read before every pixel; a stop drops that unfinished rest and instead
+/// renders every pixel's next samples of the pass (at least one, about [`BATCH_SECONDS`]), so
+/// every pixel holds the same samples and a stop waits about a quarter of a second. A partial
+/// pass is an unbiased estimate (every sample of a stratified or Sobol set is uniform on its
+/// own), and the image does not depend on how a pass was cut: a pixel's sums go on in sample
+/// order.
 pub fn render_passes(
     scene: &Scene,
     settings: &RenderSettings,
@@ -371,18 +381,17 @@ pub fn render_passes(
     };
     let first = settings.first_sample as u64;
     let stopped = || plan.stop.is_some_and(|f| f.load(Ordering::Relaxed));
+    let all = 0..tile_count(settings);
+    let pixels = settings.width as f64 * settings.height as f64;
     let start = Instant::now();
     with_threads(settings.threads, || {
         let mut film = Film::new(settings.width, settings.height);
         let mut stats = RenderStats::default();
         let mut done = range.start;
         let mut interrupted = false;
-        // samples per batch: all of a pass unless the render can be stopped; then one sample
-        // first, then what fits in BATCH_SECONDS at the rate measured (at most 4× the last)
-        let mut batch = if plan.stop.is_some() { 1 } else { u64::MAX };
         while done < range.end {
-            // every pass renders at least one batch (its end lies past `done`), so a render
-            // stopped before its first batch still writes a sample per pixel
+            // every pass renders at least one sample per pixel (its end lies past `done`), so a
+            // render stopped before its first batch still writes a sample per pixel
             if done > range.start && stopped() {
                 interrupted = true;
                 break;
@@ -395,33 +404,46 @@ pub fn render_passes(
                 size: (bounds.end - bounds.start) as u32,
             };
             let end = bounds.end.min(range.end);
-            let mut pass_film = Film::new(settings.width, settings.height);
-            while done < end {
-                let n = batch.min(end - done);
-                let t = Instant::now();
-                let s = render_range(
+            // render samples done..done + n of every pixel into `film`; the stop flag is read
+            // before each pixel when `stop` is given; (stats, whether it cut a tile short)
+            let mut batch = |n: u64, done: u64, stop: Option<&AtomicBool>, film: &mut Film| {
+                let r = first + done..first + done + n;
+                let (s, cut) = render_range(
                     scene,
                     &camera,
                     settings,
-                    set,
-                    first + done..first + done + n,
-                    &mut pass_film,
+                    (set, r, all.clone(), stop),
+                    film,
                     progress,
                 );
                 stats.rays.add(&s.rays);
                 stats.samples += s.samples;
                 stats.nonfinite += s.nonfinite;
                 stats.thread_time += s.thread_time;
-                done += n;
-                if stopped() {
-                    interrupted = done < range.end;
-                    break;
+                (s.elapsed.as_secs_f64() / (n as f64 * pixels), cut)
+            };
+            let mut pass_film = Film::new(settings.width, settings.height);
+            if plan.stop.is_none() {
+                batch(end - done, done, None, &mut pass_film);
+                done = end;
+            } else {
+                let (rate, _) = batch(1, done, None, &mut pass_film);
+                done += 1;
+                if done < end && !stopped() {
+                    let mut rest = pass_film.clone();
+                    let (_, cut) = batch(end - done, done, plan.stop, &mut rest);
+                    if !cut {
+                        pass_film = rest;
+                        done = end;
+                    } else {
+                        // stopped inside the pass: every pixel's next samples instead
+                        let n = ((BATCH_SECONDS / (rate * pixels).max(1e-12)) as u64)
+                            .clamp(1, end - done);
+                        batch(n, done, None, &mut pass_film);
+                        done += n;
+                    }
                 }
-                if plan.stop.is_some() {
-                    let per_sample = t.elapsed().as_secs_f64() / n as f64;
-                    let fits = (BATCH_SECONDS / per_sample.max(1e-9)) as u64;
-                    batch = fits.clamp(1, n.saturating_mul(4));
-                }
+                interrupted = stopped() && done < range.end;
             }
             film.merge(&pass_film).map_err(Error::Settings)?;
             if interrupted || plan.time_limit.is_some_and(|t| start.elapsed() >= t) {
@@ -448,6 +470,13 @@ struct TileResult {
     samples: u64,
     nonfinite: u64,
     time: Duration,
+    /// Whether the stop flag ended the tile before its last pixel.
+    cut: bool,
+}
+
+/// The number of tiles of a `settings`-sized image.
+fn tile_count(settings: &RenderSettings) -> u32 {
+    settings.width.div_ceil(TILE) * settings.height.div_ceil(TILE)
 }
 
 fn render_with<S: Sampler>(
@@ -455,10 +484,10 @@ fn render_with<S: Sampler>(
     camera: &Camera,
     settings: &RenderSettings,
     sampler: S,
-    range: Range<u64>,
+    (range, tiles, stop): (Range<u64>, Range<u32>, Option<&AtomicBool>),
     film: &mut Film,
     progress: &dyn Progress,
-) -> RenderStats {
+) -> (RenderStats, bool) {
     let start = Instant::now();
     let integrator = IntegratorSettings {
         max_depth: settings.max_depth,
@@ -467,8 +496,7 @@ fn render_with<S: Sampler>(
         time_traces: settings.time_traces,
     };
     let tiles_x = settings.width.div_ceil(TILE);
-    let tiles_y = settings.height.div_ceil(TILE);
-    let tiles: Vec<TileResult> = (0..tiles_x * tiles_y)
+    let tiles: Vec<TileResult> = tiles
         .into_par_iter()
         .map_with(sampler, |sampler, t| {
             let tile_start = Instant::now();
@@ -485,12 +513,22 @@ fn render_with<S: Sampler>(
                 samples: 0,
                 nonfinite: 0,
                 time: Duration::ZERO,
+                cut: false,
             };
-            for y in origin.y..origin.y + size.y {
+            'pixels: for y in origin.y..origin.y + size.y {
                 for x in origin.x..origin.x + size.x {
+                    if stop.is_some_and(|f| f.load(Ordering::Relaxed)) {
+                        tile.cut = true;
+                        break 'pixels;
+                    }
                     let pixel = UVec2::new(x, y);
                     let (mut sum, mut sum_sq, mut n) = film.pixel_sums(film.index(x, y));
                     for index in range.clone() {
+                        // a long pixel reads the flag too (every 256 samples: a relaxed load)
+                        if index % 256 == 255 && stop.is_some_and(|f| f.load(Ordering::Relaxed)) {
+                            tile.cut = true;
+                            break 'pixels;
+                        }
                         // below SAMPLE_INDICES (checked by camera_for): a u32
                         sampler.start_pixel_sample(pixel, index as u32);
                         let (o, d) = camera.generate_ray(pixel, CameraSample::draw(sampler).pixel);
@@ -508,26 +546,29 @@ fn render_with<S: Sampler>(
                     tile.sums.push((sum, sum_sq, n));
                 }
             }
-            progress.advance((size.x * size.y) as u64 * (range.end - range.start));
+            progress.advance(tile.sums.len() as u64 * (range.end - range.start));
             tile.time = tile_start.elapsed();
             tile
         })
         .collect();
     let mut stats = RenderStats::default();
+    let mut cut = false;
     for tile in tiles {
-        let mut k = 0;
-        for y in tile.origin.y..tile.origin.y + tile.size.y {
-            for x in tile.origin.x..tile.origin.x + tile.size.x {
-                let (s, s2, n) = tile.sums[k];
-                film.set_pixel_sums(film.index(x, y), s, s2, n);
-                k += 1;
-            }
+        // the pixels a tile rendered, in its order (all of them unless it was cut short)
+        let w = tile.size.x as usize;
+        for (k, &(s, s2, n)) in tile.sums.iter().enumerate() {
+            let (x, y) = (
+                tile.origin.x + (k % w) as u32,
+                tile.origin.y + (k / w) as u32,
+            );
+            film.set_pixel_sums(film.index(x, y), s, s2, n);
         }
+        cut |= tile.cut;
         stats.rays.add(&tile.rays);
         stats.samples += tile.samples;
         stats.nonfinite += tile.nonfinite;
         stats.thread_time += tile.time;
     }
     stats.elapsed = start.elapsed();
-    stats
+    (stats, cut)
 }

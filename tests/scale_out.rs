@@ -154,11 +154,26 @@ fn bad_shards_are_refused_with_one_line() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("cannot be used with"));
 }
 
-/// A render that can be stopped is cut into batches that go on from the pass's sums: the image
-/// is bit-identical to the render in one piece, for every sampler.
+/// A render that can be stopped takes a pass as one sample per pixel, then the rest (the stop
+/// flag read before every pixel); batches go on from the pass's sums, so the image is
+/// bit-identical to the render in one piece, for every sampler. A stop inside the rest drops
+/// what the cut pass rendered and takes every pixel's next samples instead (here all of them:
+/// the image is small), again the same image; a stop before the render still takes one sample
+/// per pixel, the first of the pass (= shard 0 of 37 of the same render).
 #[test]
 fn batches_do_not_change_a_pixel() {
     static NEVER: AtomicBool = AtomicBool::new(false);
+    static ALWAYS: AtomicBool = AtomicBool::new(true);
+    static CUT: AtomicBool = AtomicBool::new(false);
+    /// Sets CUT once the first batch (one sample of 240 pixels) and one tile of the rest are in.
+    struct CutAfter(std::sync::atomic::AtomicU64);
+    impl vrpt::render::Progress for CutAfter {
+        fn advance(&self, units: u64) {
+            if self.0.fetch_add(units, std::sync::atomic::Ordering::SeqCst) + units > 240 {
+                CUT.store(true, std::sync::atomic::Ordering::SeqCst);
+            }
+        }
+    }
     let scene = common::shipped("cornell-box");
     for sampler in [
         SamplerKind::Stratified,
@@ -177,15 +192,28 @@ fn batches_do_not_change_a_pixel() {
             ..RenderSettings::default()
         };
         let (whole, _) = render(&scene, &settings, &NoProgress).unwrap();
-        let plan = PassPlan {
-            stop: Some(&NEVER),
+        let plan = |stop: &'static AtomicBool| PassPlan {
+            stop: Some(stop),
             ..PassPlan::default()
         };
-        let r = render_passes(&scene, &settings, &plan, &NoProgress).unwrap();
+        let r = render_passes(&scene, &settings, &plan(&NEVER), &NoProgress).unwrap();
         assert_eq!((r.spp, r.first_sample, r.interrupted), (37, 0, false));
-        // batches of 1, 4, 16, then what fits in BATCH_SECONDS: at least three here
         assert_eq!(r.film.mean_image(), whole.mean_image(), "{sampler}");
         assert_eq!(r.film.variance_image(), whole.variance_image(), "{sampler}");
+        CUT.store(false, std::sync::atomic::Ordering::SeqCst);
+        let progress = CutAfter(Default::default());
+        let r = render_passes(&scene, &settings, &plan(&CUT), &progress).unwrap();
+        assert!(CUT.load(std::sync::atomic::Ordering::SeqCst));
+        assert_eq!((r.spp, r.interrupted), (37, false), "{sampler}");
+        assert_eq!(r.film.mean_image(), whole.mean_image(), "{sampler}");
+        let r = render_passes(&scene, &settings, &plan(&ALWAYS), &NoProgress).unwrap();
+        assert_eq!((r.spp, r.interrupted), (1, true), "{sampler}");
+        let first = PassPlan {
+            shard: Some((0, 37)),
+            ..PassPlan::default()
+        };
+        let one = render_passes(&scene, &settings, &first, &NoProgress).unwrap();
+        assert_eq!(r.film.mean_image(), one.film.mean_image(), "{sampler}");
     }
 }
 

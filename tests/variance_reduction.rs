@@ -7,6 +7,8 @@
 //! - importance sampling the Phong lobe cuts the variance of the specular term by orders of
 //!   magnitude against uniform directions, with cosine directions in between.
 
+mod common;
+
 use glam::{UVec2, Vec2, Vec3};
 use std::f64::consts::PI;
 use vrpt::analysis::fit::{log_log_slope, pearson};
@@ -98,16 +100,20 @@ fn draws_do_not_depend_on_the_order_of_asking() {
 }
 
 /// Pearson's r between the values of two dimensions, pooled over P pixels × N samples. Under
-/// independence r is approximately normal with standard deviation 1/√(PN − 1); the bound is
-/// Šidák's two-sided critical value at family-wise α = 0.01 over all pairs tested, divided by
-/// √(PN − 1). (Correlated permutations — e.g. the same stratum order in every dimension —
-/// give r ≈ 1 and fail by far.)
+/// independence r is approximately normal with standard deviation 1/√(PN − 1); for stratified
+/// points it is a little wider (a pixel's N values of a dimension are exactly stratified, not
+/// i.i.d.): measured over 300 seeds, 0.0335 against 0.0313 at N = 16 (1.07×), 0.0157 against
+/// 0.0156 at N = 64. The bound is Šidák's two-sided critical value at family-wise α = 10⁻³ over
+/// all pairs tested, times 1.2 for that width, divided by √(PN − 1): about 4.5 standard
+/// deviations, so it holds for any seed (the largest |r| over the 300 seeds was 3.5 of them)
+/// while correlated permutations — e.g. the same stratum order in every dimension — give r ≈ 1
+/// and fail by far.
 #[test]
 fn dimensions_are_uncorrelated() {
     let px: Vec<UVec2> = (0..64).map(|i| UVec2::new(i % 8, i / 8)).collect();
     let ns = [16u32, 64, 256];
-    // components of the layout's first dimensions: pixel x, y (2D); lobe (1D); direction x, y
-    // (2D); roulette (1D)
+    // components of the layout's first dimensions: pixel x, y (2D); light choice (1D); point on
+    // the light x, y (2D); lobe (1D)
     let comps: [(usize, bool); 6] = [
         (0, false),
         (0, true),
@@ -117,9 +123,9 @@ fn dimensions_are_uncorrelated() {
         (3, false),
     ];
     let pairs = comps.len() * (comps.len() - 1) / 2;
-    let z = normal_critical_value(sidak(0.01, pairs * ns.len()));
+    let z = 1.2 * normal_critical_value(sidak(1e-3, pairs * ns.len()));
     for n in ns {
-        let mut s = StratifiedSampler::new(3, n);
+        let mut s = StratifiedSampler::new(common::seed(3), n);
         let mut cols: Vec<Vec<f64>> = vec![Vec::new(); comps.len()];
         for &p in &px {
             for sample in draws(&mut s, p, n) {

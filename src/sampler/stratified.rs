@@ -1,29 +1,39 @@
-//! The stratified (jittered) sampler, with no stored sample tables.
+//! The stratified (jittered) sampler.
 //!
 //! With N samples per pixel per pass, a 1D dimension is split into N strata `[k/N, (k+1)/N)` and
 //! a 2D dimension into an a×b grid (a·b = N, a the largest divisor of N not above √N, so a prime
 //! N gives a 1×N grid of slabs: square N stratify best). Sample `j` of the pass takes stratum
-//! `π_d(j)`, where `π_d` is Kensler's hashed permutation of `0..N` keyed by (seed, pixel, pass,
-//! dimension) — a different order per dimension, so dimensions are not correlated — and is
-//! jittered uniformly inside it (the permutation key also holds N, so sets of different sizes
-//! never share strata orders).
+//! `π_d(j)`, a random permutation of `0..N` of its own for each (seed, pixel, pass, dimension) —
+//! a different order per dimension, so dimensions are not correlated — and is jittered
+//! uniformly inside it.
 //!
 //! 2D points are Kensler's correlated multi-jittered pattern: besides its a×b cell `(sx, sy)`,
 //! a point sits in one of the b sub-columns of its column and one of the a sub-rows of its row,
-//! `x = (sx·b + σ(sy) + ξ₁)/N`, `y = (sy·a + τ(sx) + ξ₂)/N`, with σ, τ permutations keyed by
-//! the dimension only. The N samples keep one per cell, and each coordinate alone is stratified
-//! into N intervals (a Latin hypercube): what an axis-aligned edge in a pixel, a shadow of an
-//! axis-aligned box or a rectangular light integrates. With jitter inside cells only, a
-//! coordinate was stratified into a intervals (8 at 64 spp, against 64 now); on Mitsuba's
-//! Cornell box at 64 spp the change lowered vrpt's MSE from 2.08e-4 to 1.24e-4 (median of 5 seeds; Mitsuba's
-//! own multijitter sampler: 1.15e-4).
+//! `x = (sx·b + σ(sy) + ξ₁)/N`, `y = (sy·a + τ(sx) + ξ₂)/N`, with σ, τ random permutations of
+//! their own for each (pixel, pass, dimension). The N samples keep one per cell, and each
+//! coordinate alone is stratified into N intervals (a Latin hypercube): what an axis-aligned
+//! edge in a pixel, a shadow of an axis-aligned box or a rectangular light integrates. With
+//! jitter inside cells only, a coordinate was stratified into a intervals (8 at 64 spp, against
+//! 64 now); on Mitsuba's Cornell box at 64 spp the change lowered vrpt's MSE from 2.08e-4 to
+//! 1.24e-4 (median of 5 seeds; Mitsuba's own multijitter sampler: 1.15e-4).
+//!
+//! **How the permutations are made.** For passes of at most [`TABLE_MAX_N`] samples and the
+//! first [`TABLE_DIMS`] dimensions, each dimension's π (and σ, τ) is a table, built at the
+//! dimension's first draw in a (pixel, pass) by a Fisher–Yates shuffle driven by a hash of
+//! (seed, pixel, pass, N, dimension), and a 2D table stores each sample's two stratum indices:
+//! a draw is a lookup and one jitter hash (issue 19: the hashed permutation per draw made a
+//! sample cost a third more than an independent one). Other passes and dimensions evaluate
+//! Kensler's hashed permutation ([`permute_index`]) per draw. Either way a value is a pure
+//! function of (seed, pixel, sample index, dimension, N), whatever order or batches the samples
+//! are drawn in; the render batches whole passes where it can, so a table is built once per
+//! pixel and pass.
 //!
 //! Each pass of N samples (sample indices `pN .. (p+1)N`) is a
 //! complete, independent stratified set, so runs of several passes stay unbiased and
 //! stratified pass by pass.
 
 use super::{Sampler, ONE_MINUS_EPSILON};
-use crate::math::{hash_words, mix64, u64_to_unit_f32};
+use crate::math::{hash_words, mix64};
 use glam::{UVec2, Vec2};
 
 /// The 2D grid `(a, b)` for N strata: `a·b = N`, `a ≤ b`, as square as N allows.
@@ -136,6 +146,66 @@ fn jitter_in(s: u32, j: f32) -> f32 {
     (s as f32 + j).min(((s + 1) as f32).next_down())
 }
 
+/// The largest pass whose strata orders are tables (see the module doc): a table of N `u32`
+/// per dimension, 16 KiB at 4096.
+pub const TABLE_MAX_N: u32 = 4096;
+/// The dimensions (from 0) whose strata orders are tables: the camera and the first three
+/// bounces of the layout, which nearly every sample draws. A table costs N shuffle steps per
+/// pixel and pass whether one sample or all draw the dimension, and later bounces are drawn by
+/// the few paths that Russian roulette and escapes leave (tables for all 37 dimensions of depth
+/// 8 were 17 % of a Cornell box render's instructions): those are hashed per draw.
+pub const TABLE_DIMS: u32 = 16;
+
+/// Shuffle `out` (at most 2¹⁶ entries) into a uniformly random permutation of its values:
+/// Fisher–Yates from the last position down, the index for position `i − 1` uniform in `0..i`
+/// from a 16-bit field of a SplitMix64 stream (`state`), four fields per step, by Lemire's
+/// multiply-shift with rejection: exactly uniform (a field that would make some index likelier
+/// is passed over, with probability below i/2¹⁶).
+#[inline(always)]
+fn shuffle(out: &mut [u32], state: &mut u64) {
+    let mut i = out.len();
+    while i > 1 {
+        *state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut bits = mix64(*state);
+        for _ in 0..4 {
+            if i <= 1 {
+                break;
+            }
+            let bound = i as u32;
+            let m = (bits as u32 & 0xffff) * bound;
+            bits >>= 16;
+            let low = m & 0xffff;
+            if low >= bound || low >= (0x1_0000 - bound) % bound {
+                out.swap(i - 1, (m >> 16) as usize);
+                i -= 1;
+            }
+        }
+    }
+}
+
+/// Fill `out` with independent uniform integers in `0..bound` (`bound` ≤ 2¹⁶), from the
+/// stream `state` as [`shuffle`] draws them.
+#[inline(always)]
+fn uniform(out: &mut [u32], bound: u32, state: &mut u64) {
+    let mut i = 0;
+    while i < out.len() {
+        *state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut bits = mix64(*state);
+        for _ in 0..4 {
+            if i == out.len() {
+                break;
+            }
+            let m = (bits as u32 & 0xffff) * bound;
+            bits >>= 16;
+            let low = m & 0xffff;
+            if low >= bound || low >= (0x1_0000 - bound) % bound {
+                out[i] = m >> 16;
+                i += 1;
+            }
+        }
+    }
+}
+
 /// Jittered strata per dimension, N samples per pixel per pass.
 #[derive(Clone, Debug)]
 pub struct StratifiedSampler {
@@ -151,14 +221,27 @@ pub struct StratifiedSampler {
     mask_a: u32,
     mask_b: u32,
     inv: f32,
-    /// Key of the current (pixel, pass, N).
+    /// `log2 N` when N is a power of two up to 2²⁴ (exact placement in a stratum), else none.
+    log2: Option<u32>,
+    /// Key of the current (pixel, pass, N), the pixel and pass it belongs to, and the count of
+    /// (pixel, pass)es entered (a table is current when its tag holds this generation).
     key: u64,
+    pixel: UVec2,
+    pass: u32,
+    generation: u32,
     /// Index of the current sample within its pass.
     j: u32,
-    dim: u64,
+    dim: u32,
     /// Index of the first sample of the first pass, and that pass's number (`origin / N`).
     origin: u32,
     pass_base: u32,
+    /// Whether this N uses tables, their tags per dimension, the tables (N entries per
+    /// dimension: a stratum in 1D, `x | y << 16` stratum indices in 2D), and room for σ, τ.
+    tables: bool,
+    /// Per dimension: `2 · generation + (1 if 2D)` of the table it holds (0: none).
+    tags: Vec<u64>,
+    table: Vec<u32>,
+    scratch: Vec<u32>,
 }
 
 impl StratifiedSampler {
@@ -187,26 +270,116 @@ impl StratifiedSampler {
             mask_a: mask_of(a),
             mask_b: mask_of(b),
             inv: 1.0 / n as f32,
+            log2: (n.is_power_of_two() && n <= 1 << 24).then(|| n.trailing_zeros()),
             key: 0,
+            pixel: UVec2::MAX,
+            pass: u32::MAX,
+            generation: 0,
             j: 0,
             dim: 0,
             origin,
             pass_base: origin / n,
+            tables: (2..=TABLE_MAX_N).contains(&n),
+            tags: Vec::new(),
+            table: Vec::new(),
+            scratch: Vec::new(),
         }
     }
 
-    /// (stratum of the current sample, jitter hash, dimension key) in the next dimension.
+    /// The key of dimension `d` in the current (pixel, pass): seeds its shuffles, its jitter
+    /// and its hashed permutations.
     #[inline(always)]
-    fn next_stratum(&mut self) -> (u32, u64, u64) {
-        let dk = mix64(self.key ^ self.dim.wrapping_mul(0xd6e8_feb8_6659_fd93));
-        self.dim += 1;
-        let jitter = mix64(dk ^ (self.j as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15));
-        let s = if self.n > 1 {
-            permute_with(self.j, &self.div_n, self.mask, dk as u32)
+    fn dim_key(&self, d: u32) -> u64 {
+        mix64(self.key ^ (d as u64).wrapping_mul(0xd6e8_feb8_6659_fd93))
+    }
+
+    /// Entry `self.j` of dimension `d`'s table (`d` < TABLE_DIMS) for the current (pixel,
+    /// pass), built first if it is not current: π by Fisher–Yates; for 2D also σ, τ, and each
+    /// entry then holds the sample's x and y stratum indices.
+    #[inline(always)]
+    fn table_entry(&mut self, d: u32, two_d: bool) -> u32 {
+        let want = 2 * self.generation as u64 + two_d as u64;
+        if self.tags.get(d as usize) != Some(&want) {
+            self.build(d, two_d);
+        }
+        self.table[(d * self.n + self.j) as usize]
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn build(&mut self, d: u32, two_d: bool) {
+        let n = self.n as usize;
+        if self.tags.len() <= d as usize {
+            self.tags.resize(d as usize + 1, 0);
+            self.table.resize((d as usize + 1) * n, 0);
+        }
+        let mut draws = self.dim_key(d);
+        let t = &mut self.table[d as usize * n..(d as usize + 1) * n];
+        if two_d {
+            // σ (b sub-columns) and τ (a sub-rows), and a random cyclic shift per column (c)
+            // and per row (r): column sx's sub-columns are σ shifted by c[sx], row sy's sub-rows
+            // τ shifted by r[sy]. Then the cells' packed stratum indices in cell order (cell
+            // sy·a + sx), shuffled: entry j is cell π(j)'s (x, y), π uniform
+            let (a, b) = self.grid;
+            let (au, bu) = (a as usize, b as usize);
+            self.scratch.clear();
+            self.scratch.extend(0..b);
+            self.scratch.extend(0..a);
+            self.scratch.resize(2 * (au + bu), 0);
+            let (sigma, rest) = self.scratch.split_at_mut(bu);
+            let (tau, rest) = rest.split_at_mut(au);
+            let (c, r) = rest.split_at_mut(au);
+            shuffle(sigma, &mut draws);
+            shuffle(tau, &mut draws);
+            uniform(c, b, &mut draws);
+            uniform(r, a, &mut draws);
+            for ((row, sy), (&sig, &rs)) in t
+                .chunks_exact_mut(au)
+                .zip(0u32..)
+                .zip(sigma.iter().zip(r.iter()))
+            {
+                for ((e, sx), (&ta, &cs)) in
+                    row.iter_mut().zip(0u32..).zip(tau.iter().zip(c.iter()))
+                {
+                    let px = if sig + cs >= b {
+                        sig + cs - b
+                    } else {
+                        sig + cs
+                    };
+                    let py = if ta + rs >= a { ta + rs - a } else { ta + rs };
+                    *e = (sx * b + px) | (sy * a + py) << 16;
+                }
+            }
         } else {
-            0
-        };
-        (s, jitter, dk)
+            for (e, i) in t.iter_mut().zip(0u32..) {
+                *e = i;
+            }
+        }
+        shuffle(t, &mut draws);
+        self.tags[d as usize] = 2 * self.generation as u64 + two_d as u64;
+    }
+
+    /// The value in stratum `s` of N at jitter `r` (the top 24 bits of `r`): `(s + r/2²⁴)/N`,
+    /// strictly inside the stratum. For N = 2^k the value's 24 bits are s's k bits then r's top
+    /// 24 − k: exact, no rounding; else the float sum is kept below the next stratum.
+    #[inline(always)]
+    fn place(&self, s: u32, r: u64) -> f32 {
+        let r24 = (r >> 40) as u32;
+        match self.log2 {
+            Some(k) => ((s << (24 - k)) | (r24 >> k)) as f32 * (1.0 / (1u32 << 24) as f32),
+            None => (jitter_in(s, r24 as f32 * (1.0 / (1u32 << 24) as f32)) * self.inv)
+                .min(ONE_MINUS_EPSILON),
+        }
+    }
+
+    /// The current sample's jitter hash in dimension `d`.
+    #[inline(always)]
+    fn jitter(&self, d: u32) -> u64 {
+        mix64(
+            self.key
+                ^ (d as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15)
+                ^ (self.j as u64).wrapping_mul(0xbf58_476d_1ce4_e5b9),
+        )
     }
 }
 
@@ -217,58 +390,88 @@ impl Sampler for StratifiedSampler {
         let p = self.div_n.div(rel);
         self.j = rel - p * self.n;
         let pass = p + self.pass_base;
-        self.key = hash_words(&[
-            self.seed ^ 0x5354_5241_5449_4649, // "STRATIFI": other streams than independent
-            ((pixel.x as u64) << 32) | pixel.y as u64,
-            ((self.n as u64) << 32) | pass as u64,
-        ]);
+        if (pixel, pass) != (self.pixel, self.pass) {
+            (self.pixel, self.pass) = (pixel, pass);
+            self.key = hash_words(&[
+                self.seed ^ 0x5354_5241_5449_4649, // "STRATIFI": other streams than independent
+                ((pixel.x as u64) << 32) | pixel.y as u64,
+                ((self.n as u64) << 32) | pass as u64,
+            ]);
+            // a new generation makes every table stale (tags hold 2·generation + kind in a
+            // u64, so a wrapped u32 generation cannot look current: it restarts at 1 below)
+            self.generation = self.generation.wrapping_add(1);
+            if self.generation == 0 {
+                self.generation = 1;
+                self.tags.iter_mut().for_each(|t| *t = 0);
+            }
+        }
         self.dim = 0;
     }
 
     #[inline]
     fn skip_1d(&mut self, n: u32) {
-        self.dim += n as u64;
+        self.dim += n;
     }
 
     /// A 2D value is one stratum of one dimension index.
     #[inline]
     fn skip_2d(&mut self, n: u32) {
-        self.dim += n as u64;
+        self.dim += n;
     }
 
     #[inline(always)]
     fn next_1d(&mut self) -> f32 {
-        let (s, h, _) = self.next_stratum();
-        (jitter_in(s, u64_to_unit_f32(h)) * self.inv).min(ONE_MINUS_EPSILON)
+        let d = self.dim;
+        self.dim += 1;
+        let h = self.jitter(d);
+        let s = if self.tables && d < TABLE_DIMS {
+            self.table_entry(d, false)
+        } else if self.n > 1 {
+            permute_with(self.j, &self.div_n, self.mask, self.dim_key(d) as u32)
+        } else {
+            0
+        };
+        self.place(s, h)
     }
 
+    /// Kensler's correlated multi-jitter: cell `(sx, sy) = π(j)` of the a×b grid, sub-column
+    /// `σ(sy)` of its b, sub-row `τ(sx)` of its a, with σ and τ one permutation each per
+    /// (pixel, pass, dimension), so a column holds every sub-column once and a row every
+    /// sub-row. π, σ and τ are independent (from one shuffle stream, or independent keys):
+    /// correlated σ and τ left sub-cells unsampled (a bias, found in an earlier version).
     #[inline(always)]
     fn next_2d(&mut self) -> Vec2 {
-        let (s, h, dk) = self.next_stratum();
-        let (a, b) = self.grid;
-        let sy = self.div_a.div(s);
-        let sx = s - sy * a;
-        // the sub-column (of b): a permutation of the row index, its own for each column, so a
-        // column holds every sub-column once; the sub-row (of a) likewise, its own for each row.
-        // Each permutation's key is hashed from (dimension key, column or row): keys that
-        // differed by xor-ed constants left Kensler's permutation of a few elements correlated
-        // between σ and τ, and some sub-cells were never sampled (a bias)
-        let px = if b > 1 {
-            let k = mix64(dk ^ (sx as u64 + 1).wrapping_mul(0xd1b5_4a32_d192_ed03));
-            permute_with(sy, &self.div_b, self.mask_b, k as u32)
+        let d = self.dim;
+        self.dim += 1;
+        let h = self.jitter(d);
+        let (x, y) = if self.tables && d < TABLE_DIMS {
+            let e = self.table_entry(d, true);
+            (e & 0xffff, e >> 16)
         } else {
-            0
+            let dk = self.dim_key(d);
+            let s = if self.n > 1 {
+                permute_with(self.j, &self.div_n, self.mask, dk as u32)
+            } else {
+                0
+            };
+            let (a, b) = self.grid;
+            let sy = self.div_a.div(s);
+            let sx = s - sy * a;
+            let px = if b > 1 {
+                let k = mix64(dk ^ 0xd1b5_4a32_d192_ed03);
+                permute_with(sy, &self.div_b, self.mask_b, k as u32)
+            } else {
+                0
+            };
+            let py = if a > 1 {
+                let k = mix64(dk ^ 0xaef1_7502_108e_f2d9);
+                permute_with(sx, &self.div_a, self.mask_a, k as u32)
+            } else {
+                0
+            };
+            (sx * b + px, sy * a + py)
         };
-        let py = if a > 1 {
-            let k = mix64(!dk ^ (sy as u64 + 1).wrapping_mul(0xaef1_7502_108e_f2d9));
-            permute_with(sx, &self.div_a, self.mask_a, k as u32)
-        } else {
-            0
-        };
-        Vec2::new(
-            (jitter_in(sx * b + px, u64_to_unit_f32(h)) * self.inv).min(ONE_MINUS_EPSILON),
-            (jitter_in(sy * a + py, u64_to_unit_f32(h << 24)) * self.inv).min(ONE_MINUS_EPSILON),
-        )
+        Vec2::new(self.place(x, h), self.place(y, h << 24))
     }
 }
 
@@ -313,11 +516,13 @@ mod tests {
     /// several dimensions, pixels and passes.
     #[test]
     fn points_2d_fill_cells_and_both_projections() {
-        for n in [1u32, 7, 8, 12, 16, 64, 100] {
+        // tables (n ≤ TABLE_MAX_N, dimensions below TABLE_DIMS) and hashed permutations (n
+        // above, and later dimensions)
+        for n in [1u32, 7, 8, 12, 16, 64, 100, TABLE_MAX_N + 3] {
             let (a, b) = grid_shape(n);
             let mut sampler = StratifiedSampler::new(5, n);
             for (pixel, pass) in [(UVec2::new(0, 0), 0u32), (UVec2::new(3, 9), 2)] {
-                for dim in 0..4 {
+                for dim in (0..4).chain(TABLE_DIMS - 1..TABLE_DIMS + 2) {
                     let (mut cells, mut xs, mut ys) = (
                         vec![0; n as usize],
                         vec![0; n as usize],
