@@ -1,15 +1,25 @@
 //! The ray-triangle accelerator: an obvhs compressed wide BVH (CWBVH, 8-wide) over all
 //! triangles, with the triangles stored in BVH leaf order so a hit indexes them directly.
 //!
-//! Triangles are `obvhs::rt_triangle::RtTriangle` (`v0`, `e1 = v0 − v1`, `e2 = v2 − v0`), the
-//! layout its Möller–Trumbore test is fastest with. A hit reports the barycentrics `(b1, b2)` of
-//! `v1` and `v2`: the point is `(1 − b1 − b2)·v0 + b1·v1 + b2·v2`. Indices in a [`Hit`] and in
-//! [`Accel::order`] are BVH-order indices; `order[i]` is the input index of BVH triangle `i`.
+//! Triangles are `obvhs::rt_triangle::RtTriangle` (`v0`, `e1 = v0 − v1`, `e2 = v2 − v0`, and the
+//! normal `ng = e1 × e2`: one 64-byte line each), the layout its Möller–Trumbore test is fastest
+//! with. A hit reports the barycentrics `(b1, b2)` of `v1` and `v2`: the point is
+//! `(1 − b1 − b2)·v0 + b1·v1 + b2·v2`. Indices in a [`Hit`] and in [`Accel::order`] are BVH-order
+//! indices; `order[i]` is the input index of BVH triangle `i`.
+//!
+//! **Traversal** is obvhs's own loop (its `traverse!` macro over the CWBVH nodes), driven from
+//! here so a renderer pays no per-ray cost it does not need (issue 19): the node stack is a
+//! [`TraceStack`] that a thread keeps from ray to ray (obvhs's entry points zero a fresh 256-byte
+//! stack for every ray: 2 % of a render's instructions), the triangle test keeps the numerators
+//! of the barycentrics of the closest hit so far (obvhs's path ran the test again after the
+//! traversal to get them: same arithmetic, same bits), and shadow rays stop at the first hit.
 
+use glam::{UVec2, Vec2};
 use glam::{Vec3, Vec3A};
 use obvhs::{
     cwbvh::{builder::build_cwbvh_from_tris, CwBvh},
-    ray::{Ray, RayHit},
+    faststack::{FastStack, HeapStack, StackStack},
+    ray::Ray,
     rt_triangle::RtTriangle,
     triangle::Triangle,
     BvhBuildParams,
@@ -27,6 +37,75 @@ pub struct Hit {
     pub b1: f32,
     /// Barycentric weight of `v2`.
     pub b2: f32,
+}
+
+/// The node stack of a traversal, kept by a thread from ray to ray (no allocation and no zeroing
+/// per ray). Deep enough for any CWBVH obvhs builds (its own traversal uses 32 entries).
+pub struct TraceStack(HeapStack<UVec2>);
+
+impl Default for TraceStack {
+    fn default() -> Self {
+        TraceStack(HeapStack::new_with_capacity(TRAVERSAL_STACK))
+    }
+}
+
+/// Entries of a traversal stack: obvhs's own depth bound.
+const TRAVERSAL_STACK: usize = 32;
+
+/// The state obvhs's `traverse!` macro walks with: its field names, any stack.
+struct Walk<'s, S: FastStack<UVec2>> {
+    stack: &'s mut S,
+    current_group: UVec2,
+    primitive_group: UVec2,
+    oct_inv4: u32,
+    primitive_id: u32,
+    hitmask: u32,
+}
+
+impl<'s, S: FastStack<UVec2>> Walk<'s, S> {
+    /// A walk from the root for a ray of direction `dir`, on an emptied `stack`.
+    #[inline(always)]
+    fn new(stack: &'s mut S, dir: Vec3A, empty: bool) -> Self {
+        stack.clear();
+        // the octant bits of obvhs's ray_get_octant_inv4
+        let oct_inv4 = (if dir.x < 0.0 { 0 } else { 0x0404_0404 })
+            | (if dir.y < 0.0 { 0 } else { 0x0202_0202 })
+            | (if dir.z < 0.0 { 0 } else { 0x0101_0101 });
+        Walk {
+            stack,
+            current_group: if empty {
+                UVec2::ZERO
+            } else {
+                UVec2::new(0, 0x8000_0000)
+            },
+            primitive_group: UVec2::ZERO,
+            oct_inv4,
+            primitive_id: 0,
+            hitmask: 0,
+        }
+    }
+}
+
+/// The test of `RtTriangle::intersect` (the same arithmetic, so the same bits), returning the
+/// hit's `t` and the numerators of its barycentrics and their denominator, or `None`.
+#[inline(always)]
+fn hit_triangle(tri: &RtTriangle, ray: &Ray) -> Option<(f32, Vec2, f32)> {
+    let c = tri.v0 - ray.origin;
+    let r = ray.direction.cross(c);
+    let det = tri.ng.dot(ray.direction);
+    let inv_det = 1.0 / det;
+    let (nu, nv) = (r.dot(tri.e2), r.dot(tri.e1));
+    let u = nu * inv_det;
+    let v = nv * inv_det;
+    let w = 1.0 - u - v;
+    let signs = u.to_bits() | v.to_bits() | w.to_bits();
+    if inv_det != 0.0 && signs & 0x8000_0000 == 0 {
+        let t = tri.ng.dot(c) * inv_det;
+        if t >= ray.tmin && t <= ray.tmax {
+            return Some((t, Vec2::new(nu, nv), det));
+        }
+    }
+    None
 }
 
 /// The BVH and the triangles in its order.
@@ -95,35 +174,114 @@ impl Accel {
         [t.v0.into(), (t.v0 - t.e1).into(), (t.v0 + t.e2).into()]
     }
 
-    /// Closest hit along `origin + t·dir` for `t ∈ (0, tmax)`; `dir` must be unit length.
+    /// Closest hit along `origin + t·dir` for `t ∈ (0, tmax)`; `dir` must be unit length. (A
+    /// fresh stack per call; a renderer keeps one: [`Accel::intersect_with`].)
     #[inline]
     pub fn intersect(&self, origin: Vec3, dir: Vec3, tmax: f32) -> Option<Hit> {
-        let ray = Ray::new(Vec3A::from(origin), Vec3A::from(dir), 0.0, tmax);
-        let mut hit = RayHit::none();
-        if self
-            .bvh
-            .ray_traverse(ray, &mut hit, |r, id| self.tris[id].intersect(r))
-        {
-            let prim = hit.primitive_id;
-            let bary = self.tris[prim as usize].compute_barycentric(&ray);
-            Some(Hit {
-                t: hit.t,
-                prim,
-                b1: bary.x,
-                b2: bary.y,
-            })
-        } else {
-            None
-        }
+        self.closest(
+            &mut StackStack::<UVec2, TRAVERSAL_STACK>::default(),
+            origin,
+            dir,
+            tmax,
+        )
+    }
+
+    /// [`Accel::intersect`] on a thread's own stack.
+    #[inline]
+    pub fn intersect_with(
+        &self,
+        stack: &mut TraceStack,
+        origin: Vec3,
+        dir: Vec3,
+        tmax: f32,
+    ) -> Option<Hit> {
+        self.closest(&mut stack.0, origin, dir, tmax)
     }
 
     /// True if anything lies along `origin + t·dir` for `t ∈ (0, tmax)` (any hit, early out).
     #[inline]
     pub fn occluded(&self, origin: Vec3, dir: Vec3, tmax: f32) -> bool {
+        self.any(
+            &mut StackStack::<UVec2, TRAVERSAL_STACK>::default(),
+            origin,
+            dir,
+            tmax,
+        )
+    }
+
+    /// [`Accel::occluded`] on a thread's own stack.
+    #[inline]
+    pub fn occluded_with(
+        &self,
+        stack: &mut TraceStack,
+        origin: Vec3,
+        dir: Vec3,
+        tmax: f32,
+    ) -> bool {
+        self.any(&mut stack.0, origin, dir, tmax)
+    }
+
+    #[inline(always)]
+    fn closest<S: FastStack<UVec2>>(
+        &self,
+        stack: &mut S,
+        origin: Vec3,
+        dir: Vec3,
+        tmax: f32,
+    ) -> Option<Hit> {
+        let mut ray = Ray::new(Vec3A::from(origin), Vec3A::from(dir), 0.0, tmax);
+        let mut state = Walk::new(stack, ray.direction, self.bvh.nodes.is_empty());
+        let mut node;
+        // the closest hit so far: primitive, barycentric numerators, denominator
+        let mut best: Option<(u32, Vec2, f32)> = None;
+        obvhs::traverse!(
+            self.bvh,
+            node,
+            state,
+            node.intersect_ray(&ray, state.oct_inv4),
+            {
+                let id = state.primitive_id;
+                if let Some((t, n, det)) = hit_triangle(&self.tris[id as usize], &ray) {
+                    if t < ray.tmax {
+                        ray.tmax = t;
+                        best = Some((id, n, det));
+                    }
+                }
+            }
+        );
+        best.map(|(prim, n, det)| {
+            // compute_barycentric's division, on the numerators of the test
+            let b = n / det;
+            Hit {
+                t: ray.tmax,
+                prim,
+                b1: b.x,
+                b2: b.y,
+            }
+        })
+    }
+
+    #[inline(always)]
+    fn any<S: FastStack<UVec2>>(&self, stack: &mut S, origin: Vec3, dir: Vec3, tmax: f32) -> bool {
         let ray = Ray::new(Vec3A::from(origin), Vec3A::from(dir), 0.0, tmax);
-        !self
-            .bvh
-            .ray_traverse_miss(ray, |r, id| self.tris[id].intersect(r))
+        let mut state = Walk::new(stack, ray.direction, self.bvh.nodes.is_empty());
+        let mut node;
+        let mut hit = false;
+        'walk: {
+            obvhs::traverse!(
+                self.bvh,
+                node,
+                state,
+                node.intersect_ray(&ray, state.oct_inv4),
+                {
+                    if hit_triangle(&self.tris[state.primitive_id as usize], &ray).is_some() {
+                        hit = true;
+                        break 'walk;
+                    }
+                }
+            );
+        }
+        hit
     }
 
     /// Closest hit by testing every triangle: the reference for tests and benchmarks.

@@ -27,6 +27,7 @@
 //! [`crate::sampler::layout`]), used or not, so a dimension index means the same decision in
 //! every sample — which is what stratification needs.
 
+use crate::accel::TraceStack;
 use crate::bsdf::Directions;
 use crate::lights::LightStrategy;
 use crate::math::Frame;
@@ -156,15 +157,16 @@ struct Previous {
     pdf: f32,
 }
 
-/// Radiance arriving at `origin` from direction `dir` (unit); rays traced are added to `rays`.
+/// Radiance arriving at `origin` from direction `dir` (unit); rays traced are added to `rays`,
+/// on the thread's traversal stack `stack`.
 #[inline]
 pub fn radiance<S: Sampler>(
     scene: &Scene,
-    mut origin: Vec3,
-    mut dir: Vec3,
+    (mut origin, mut dir): (Vec3, Vec3),
     sampler: &mut S,
     settings: &IntegratorSettings,
     rays: &mut RayCounts,
+    stack: &mut TraceStack,
 ) -> Vec3 {
     let mode = settings.lights;
     let sample_lights = mode != LightStrategy::Bsdf && scene.lights.any();
@@ -179,7 +181,9 @@ pub fn radiance<S: Sampler>(
             rays.bounce += 1;
         }
         let Some(hit) = timed(settings.time_traces, rays, || {
-            scene.accel.intersect(origin, dir, f32::INFINITY)
+            scene
+                .accel
+                .intersect_with(stack, origin, dir, f32::INFINITY)
         }) else {
             let w = match (mode, prev) {
                 (_, None) | (LightStrategy::Bsdf, _) => 1.0,
@@ -249,7 +253,7 @@ pub fn radiance<S: Sampler>(
                         rays.shadow += 1;
                         if tmax > 0.0
                             && !timed(settings.time_traces, rays, || {
-                                scene.accel.occluded(spawn, to, tmax)
+                                scene.accel.occluded_with(stack, spawn, to, tmax)
                             })
                         {
                             let w = match mode {

@@ -6,6 +6,7 @@
 //! threads or the order in which tiles finish. Non-finite samples are counted and dropped (the
 //! pixel's count excludes them), never written into the image.
 
+use crate::accel::TraceStack;
 use crate::camera::Camera;
 use crate::error::{Error, Result};
 use crate::film::Film;
@@ -356,13 +357,12 @@ pub fn pass_bounds(done: u64, pass: u64, spp: u64) -> Range<u64> {
 ///
 /// Each pixel renders the samples of a pass in one go, so per-pixel work of the sampler (the
 /// stratified sampler's tables) is done once per pixel and pass. A render that can be stopped
-/// first takes one sample per pixel of a pass (it measures the speed), then the rest of the pass
-/// with the stop flag read before every pixel; a stop drops that unfinished rest and instead
-/// renders every pixel's next samples of the pass (at least one, about [`BATCH_SECONDS`]), so
-/// every pixel holds the same samples and a stop waits about a quarter of a second. A partial
-/// pass is an unbiased estimate (every sample of a stratified or Sobol set is uniform on its
-/// own), and the image does not depend on how a pass was cut: a pixel's sums go on in sample
-/// order.
+/// reads the stop flag before every pixel (and every 256 samples of one); a stop drops the pass
+/// under way and renders every pixel's first samples of it instead (at least one, about
+/// [`BATCH_SECONDS`] at the speed of the pixels that finished), so every pixel holds the same
+/// samples and a stop waits about a quarter of a second. A partial pass is an unbiased estimate
+/// (every sample of a stratified or Sobol set is uniform on its own), and the image does not
+/// depend on how a pass was cut: a pixel's sums go on in sample order.
 pub fn render_passes(
     scene: &Scene,
     settings: &RenderSettings,
@@ -405,7 +405,8 @@ pub fn render_passes(
             };
             let end = bounds.end.min(range.end);
             // render samples done..done + n of every pixel into `film`; the stop flag is read
-            // before each pixel when `stop` is given; (stats, whether it cut a tile short)
+            // before each pixel when `stop` is given; (wall seconds per pixel sample of the
+            // pixels completed, if any; whether it cut a tile short)
             let mut batch = |n: u64, done: u64, stop: Option<&AtomicBool>, film: &mut Film| {
                 let r = first + done..first + done + n;
                 let (s, cut) = render_range(
@@ -420,28 +421,25 @@ pub fn render_passes(
                 stats.samples += s.samples;
                 stats.nonfinite += s.nonfinite;
                 stats.thread_time += s.thread_time;
-                (s.elapsed.as_secs_f64() / (n as f64 * pixels), cut)
+                let rate = (s.samples > 0).then(|| s.elapsed.as_secs_f64() / s.samples as f64);
+                (rate, cut)
             };
             let mut pass_film = Film::new(settings.width, settings.height);
             if plan.stop.is_none() {
                 batch(end - done, done, None, &mut pass_film);
                 done = end;
             } else {
-                let (rate, _) = batch(1, done, None, &mut pass_film);
-                done += 1;
-                if done < end && !stopped() {
-                    let mut rest = pass_film.clone();
-                    let (_, cut) = batch(end - done, done, plan.stop, &mut rest);
-                    if !cut {
-                        pass_film = rest;
-                        done = end;
-                    } else {
-                        // stopped inside the pass: every pixel's next samples instead
-                        let n = ((BATCH_SECONDS / (rate * pixels).max(1e-12)) as u64)
-                            .clamp(1, end - done);
-                        batch(n, done, None, &mut pass_film);
-                        done += n;
-                    }
+                let (rate, cut) = batch(end - done, done, plan.stop, &mut pass_film);
+                if !cut {
+                    done = end;
+                } else {
+                    // stopped inside the pass: drop it, take every pixel's first samples of it
+                    // instead (one when no pixel finished, so no rate is known)
+                    let n = rate.map_or(1, |r| (BATCH_SECONDS / (r * pixels).max(1e-12)) as u64);
+                    let n = n.clamp(1, end - done);
+                    pass_film = Film::new(settings.width, settings.height);
+                    batch(n, done, None, &mut pass_film);
+                    done += n;
                 }
                 interrupted = stopped() && done < range.end;
             }
@@ -515,6 +513,7 @@ fn render_with<S: Sampler>(
                 time: Duration::ZERO,
                 cut: false,
             };
+            let mut stack = TraceStack::default();
             'pixels: for y in origin.y..origin.y + size.y {
                 for x in origin.x..origin.x + size.x {
                     if stop.is_some_and(|f| f.load(Ordering::Relaxed)) {
@@ -531,8 +530,9 @@ fn render_with<S: Sampler>(
                         }
                         // below SAMPLE_INDICES (checked by camera_for): a u32
                         sampler.start_pixel_sample(pixel, index as u32);
-                        let (o, d) = camera.generate_ray(pixel, CameraSample::draw(sampler).pixel);
-                        let l = radiance(scene, o, d, sampler, &integrator, &mut tile.rays);
+                        let ray = camera.generate_ray(pixel, CameraSample::draw(sampler).pixel);
+                        let l =
+                            radiance(scene, ray, sampler, &integrator, &mut tile.rays, &mut stack);
                         if l.is_finite() {
                             let v = l.as_dvec3();
                             sum += v;

@@ -15,6 +15,12 @@
 //! index shuffle permutes those bits, so the first `2^k` samples of a pixel hold one point
 //! in every elementary interval of the first two dimensions — scrambled or not (tested).
 //!
+//! Speed (issue 19): a Sobol point is a GF(2)-linear function of its (shuffled, 16-bit) index,
+//! so each dimension's function is four tables of 16 entries, one per 4 bits of the index
+//! ([`NibbleTables`], 64 KiB for the 256 dimensions, made once from the crate's `sobol_rev`):
+//! four lookups instead of a loop over the index's set bits, the same values. The pixel's key is
+//! hashed once per pixel and block of samples, not per sample.
+//!
 //! Limits: the crate's sequences have 2¹⁶ samples and 256 dimensions. Sample `i ≥ 2¹⁶`
 //! continues in a fresh sequence (seed hashed with `i / 2¹⁶`), dimension `d ≥ 256` in another
 //! (seed hashed with `d / 256`, dimension `d mod 256`): each is an independent uniform point
@@ -30,10 +36,46 @@ pub const SEQUENCE_LEN: u32 = 1 << 16;
 /// Dimensions per scrambled sequence.
 pub const SEQUENCE_DIMS: u32 = sobol_burley::NUM_DIMENSIONS;
 
+/// Each dimension's Sobol function of the reversed, shuffled index as tables:
+/// `sobol_rev(x, d) = ⊕ₖ T[d][k][(x >> (16 + 4k)) & 15]` for the top 16 bits of `x` (the crate
+/// reads no others), because `sobol_rev` is linear over GF(2) in `x`.
+struct NibbleTables([[[u32; 16]; 4]; SEQUENCE_DIMS as usize]);
+
+impl NibbleTables {
+    /// The tables, made at the first use in the process.
+    fn get() -> &'static NibbleTables {
+        static TABLES: std::sync::OnceLock<Box<NibbleTables>> = std::sync::OnceLock::new();
+        TABLES.get_or_init(|| {
+            let mut t = Box::new(NibbleTables([[[0; 16]; 4]; SEQUENCE_DIMS as usize]));
+            for (d, dim) in t.0.iter_mut().enumerate() {
+                for (k, nibble) in dim.iter_mut().enumerate() {
+                    for (v, e) in nibble.iter_mut().enumerate() {
+                        *e = sobol_rev((v as u32) << (16 + 4 * k), d as u32);
+                    }
+                }
+            }
+            t
+        })
+    }
+
+    /// `sobol_rev(index_rev, d)`.
+    #[inline(always)]
+    fn sobol_rev(&self, index_rev: u32, d: u32) -> u32 {
+        let t = &self.0[d as usize];
+        t[0][(index_rev >> 16) as usize & 15]
+            ^ t[1][(index_rev >> 20) as usize & 15]
+            ^ t[2][(index_rev >> 24) as usize & 15]
+            ^ t[3][(index_rev >> 28) as usize & 15]
+    }
+}
+
 /// Owen-scrambled Sobol points, one sequence per (pixel, block of 2¹⁶ samples, block of 256
 /// dimensions).
-#[derive(Clone, Debug)]
+#[derive(Clone)]
 pub struct SobolSampler {
+    tables: &'static NibbleTables,
+    /// The pixel and sample block whose key `key` holds.
+    keyed: (UVec2, u32),
     seed: u64,
     /// Key of the current (pixel, sample block).
     key: u64,
@@ -48,10 +90,22 @@ pub struct SobolSampler {
     dim: u32,
 }
 
+impl std::fmt::Debug for SobolSampler {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("SobolSampler")
+            .field("seed", &self.seed)
+            .field("index", &self.index)
+            .field("dim", &self.dim)
+            .finish_non_exhaustive()
+    }
+}
+
 impl SobolSampler {
     /// A sampler whose points depend on `seed`.
     pub fn new(seed: u64) -> Self {
         SobolSampler {
+            tables: NibbleTables::get(),
+            keyed: (UVec2::MAX, u32::MAX),
             seed,
             key: 0,
             seq_seed: 0,
@@ -80,7 +134,7 @@ impl SobolSampler {
             self.block = block;
             self.enter_block(block);
         }
-        let sobol = sobol_rev(self.index_rev, dim);
+        let sobol = self.tables.sobol_rev(self.index_rev, dim);
         let scramble = {
             let seed = self.seq_seed.wrapping_mul(0x9c8f_2d3b);
             (dim >> 2)
@@ -94,11 +148,15 @@ impl SobolSampler {
 impl Sampler for SobolSampler {
     #[inline]
     fn start_pixel_sample(&mut self, pixel: UVec2, index: u32) {
-        self.key = hash_words(&[
-            self.seed ^ 0x534f_424f_4c53_4f42, // "SOBOLSOB": other streams than the others
-            ((pixel.x as u64) << 32) | pixel.y as u64,
-            (index / SEQUENCE_LEN) as u64,
-        ]);
+        let keyed = (pixel, index / SEQUENCE_LEN);
+        if keyed != self.keyed {
+            self.keyed = keyed;
+            self.key = hash_words(&[
+                self.seed ^ 0x534f_424f_4c53_4f42, // "SOBOLSOB": other streams than the others
+                ((pixel.x as u64) << 32) | pixel.y as u64,
+                keyed.1 as u64,
+            ]);
+        }
         self.index = index % SEQUENCE_LEN;
         self.dim = 0;
         self.block = 0;
