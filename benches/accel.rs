@@ -14,6 +14,7 @@ use std::hint::black_box;
 use std::time::Duration;
 use vrpt::accel::Accel;
 use vrpt::camera::Camera;
+use vrpt::lights::{LightChoice, LightPoints};
 use vrpt::math::Frame;
 use vrpt::math::{hash_words, u64_to_unit_f32};
 use vrpt::sampling::{sample_cosine_hemisphere, sample_uniform_hemisphere};
@@ -127,6 +128,7 @@ fn cornell_rays() -> (Scene, Vec<(Vec3, Vec3)>, Vec<(Vec3, Vec3, f32)>) {
     let scene = vrpt::scene::load(std::path::Path::new(path)).expect("the shipped Cornell box");
     let camera = Camera::new(&scene.camera, 256, 256).expect("its camera");
     let (mut closest, mut shadow) = (Vec::new(), Vec::new());
+    let lights = scene.lights.sampler(LightPoints::Area, LightChoice::Power);
     for i in 0..256 * 256usize {
         let (mut o, mut d) = camera.generate_ray(
             UVec2::new((i % 256) as u32, (i / 256) as u32),
@@ -142,9 +144,7 @@ fn cornell_rays() -> (Scene, Vec<(Vec3, Vec3)>, Vec<(Vec3, Vec3, f32)>) {
             let spawn = s.p + n * scene.ray_epsilon;
             let k = 10 * bounce;
             if let Some(ls) =
-                scene
-                    .lights
-                    .sample(s.p, n, u(i, k + 3), Vec2::new(u(i, k + 4), u(i, k + 5)))
+                lights.sample(s.p, n, u(i, k + 3), Vec2::new(u(i, k + 4), u(i, k + 5)))
             {
                 if ls.wi.dot(n) > 0.0 && ls.dist.is_finite() {
                     shadow.push((spawn, ls.wi, ls.dist - 2.0 * scene.ray_epsilon));

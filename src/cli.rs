@@ -11,7 +11,7 @@ use vrpt::bsdf::Directions;
 use vrpt::commands::experiment::{CompareRequest, ConvergeRequest, Experiment, ExperimentRequest};
 use vrpt::commands::{diff, merge, render, Written};
 use vrpt::error::{Error, Result};
-use vrpt::lights::LightStrategy;
+use vrpt::lights::{LightChoice, LightPoints, LightStrategy};
 use vrpt::output::parse_shard;
 use vrpt::render::Progress;
 use vrpt::sampler::SamplerKind;
@@ -55,12 +55,19 @@ pub struct StrategyArgs {
     /// How light is found at each vertex (default: mis).
     #[arg(long, value_enum)]
     pub lights: Option<LightStrategy>,
+    /// How a point on a light is placed (default: projected).
+    #[arg(long, value_enum)]
+    pub light_points: Option<LightPoints>,
+    /// How the light of a vertex is chosen (default: tree).
+    #[arg(long, value_enum)]
+    pub light_choice: Option<LightChoice>,
 }
 
 impl StrategyArgs {
     /// The strategy the flags ask for; an error if a flag contradicts the preset.
     pub fn resolve(&self) -> Result<Strategy> {
-        Strategy::from_parts(self.strategy, self.sampler, self.directions, self.lights)
+        let axes = (self.sampler, self.directions, self.lights);
+        Strategy::from_parts(self.strategy, axes, (self.light_points, self.light_choice))
             .map_err(Error::Settings)
     }
 }

@@ -29,7 +29,7 @@
 
 use crate::accel::TraceStack;
 use crate::bsdf::Directions;
-use crate::lights::LightStrategy;
+use crate::lights::{LightChoice, LightPoints, LightStrategy};
 use crate::math::Frame;
 use crate::sampler::layout::BounceSample;
 use crate::sampler::Sampler;
@@ -46,6 +46,9 @@ pub struct IntegratorSettings {
     pub max_depth: u32,
     pub directions: Directions,
     pub lights: LightStrategy,
+    /// How points on lights are placed and lights chosen.
+    pub light_points: LightPoints,
+    pub light_choice: LightChoice,
     /// Time one traversal (closest hit or shadow ray) in every [`TIMED_RAY_EVERY`] into
     /// [`RayCounts::trace_ns`]; off unless asked for (`vrpt render --stats`).
     pub time_traces: bool,
@@ -169,7 +172,10 @@ pub fn radiance<S: Sampler>(
     stack: &mut TraceStack,
 ) -> Vec3 {
     let mode = settings.lights;
-    let sample_lights = mode != LightStrategy::Bsdf && scene.lights.any();
+    let lights = scene
+        .lights
+        .sampler(settings.light_points, settings.light_choice);
+    let sample_lights = mode != LightStrategy::Bsdf && lights.any();
     let mut l = Vec3::ZERO;
     let mut beta = Vec3::ONE;
     // None for the camera ray: what it sees counts fully in every mode
@@ -189,7 +195,7 @@ pub fn radiance<S: Sampler>(
                 (_, None) | (LightStrategy::Bsdf, _) => 1.0,
                 (LightStrategy::Nee, _) => 0.0,
                 (LightStrategy::Mis, Some(v)) => {
-                    mis_weight(v.pdf, scene.lights.environment_pdf(v.n, dir))
+                    mis_weight(v.pdf, lights.environment_pdf(v.n, dir))
                 }
             };
             l += beta * scene.environment() * w;
@@ -207,7 +213,7 @@ pub fn radiance<S: Sampler>(
                     let p_light = scene
                         .lights
                         .light_of(hit.prim)
-                        .map_or(0.0, |i| scene.lights.triangle_pdf(i, v.p, s.p));
+                        .map_or(0.0, |i| lights.pdf(i, v.p, v.n, s.p));
                     mis_weight(v.pdf, p_light)
                 }
             };
@@ -236,7 +242,7 @@ pub fn radiance<S: Sampler>(
         let wo_local = frame.to_local(wo);
         let spawn = s.p + ng * scene.ray_epsilon;
         if sample_lights {
-            if let Some(ls) = scene.lights.sample(s.p, ns, u.light, u.light_point) {
+            if let Some(ls) = lights.sample(s.p, ns, u.light, u.light_point) {
                 let wi_local = frame.to_local(ls.wi);
                 // light from below the geometric surface cannot arrive (as for BSDF samples)
                 if ls.wi.dot(ng) > 0.0 && wi_local.z > 0.0 {

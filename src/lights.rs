@@ -1,31 +1,58 @@
-//! The lights of a scene and how they are sampled: every emissive triangle, and the constant
-//! environment when it is not black.
+//! The lights of a scene and how they are sampled: the emitters (emissive triangles, and pairs
+//! of them that form a rectangle) and the constant environment when it is not black.
 //!
-//! - **Emissive triangles** are one-sided: a triangle emits `Le` on the side its
-//!   counter-clockwise normal `n_l` points to. A point on it is chosen uniformly by area
-//!   ([`sample_uniform_triangle`], pdf `1/A`); seen from a point `x` the pdf per unit solid angle
-//!   is `p_ω = p_A · d² / cosθ_l`, with `d = |y − x|` and `cosθ_l = n_l · (x − y)/d > 0`.
+//! - **Emitters** are one-sided: an emitter sends `Le` to the side its counter-clockwise normal
+//!   `n_l` points to. Two emissive triangles of the same emission that share their diagonal and
+//!   together make a rectangle (checked at load with a tolerance) are one emitter, so one 2D
+//!   point stratifies the whole rectangle. (A parallelogram that is not a rectangle stays two
+//!   triangles: Ureña's spherical-rectangle map needs perpendicular edges.)
+//! - **A point on an emitter** ([`LightPoints`], `--light-points`), seen from a receiving point
+//!   `x` with shading normal `n`:
+//!   - `area`: uniform by area (Heitz's triangle map, or the rectangle's `s + u₀e_x + u₁e_y`),
+//!     pdf `1/A`, per solid angle `p_ω = d²/(A cosθ_l)`, `cosθ_l = n_l·(x − y)/d > 0`;
+//!   - `solid-angle`: uniform in the solid angle `Ω` the emitter subtends
+//!     ([`SphericalTriangle`], [`SphericalRectangle`]), `p_ω = 1/Ω`;
+//!   - `projected`: the solid-angle map with `u` first warped bilinearly by the receiver's
+//!     cosine at the domain's corners, `w = max(0.01, |n·ω_corner|)` (pbrt-v4's approximation of
+//!     projected solid angle), `p_ω = bilinear(u⁻¹(ω))/Ω`.
+//!
+//!   Both spherical methods fall back to area sampling where the spherical math loses accuracy,
+//!   as pbrt-v4 does: a triangle subtending less than [`MIN_TRIANGLE_SOLID_ANGLE`] (3·10⁻⁴ sr)
+//!   or more than [`MAX_SOLID_ANGLE`] (6.22 sr), a rectangle less than
+//!   [`MIN_RECTANGLE_SOLID_ANGLE`] (10⁻⁴ sr) or more than 6.22 sr. The pdf of a point is always
+//!   the pdf of the method that sampled it from that receiver (the same test decides).
 //! - **The environment** (radiance `L_env` for every escaping ray) is sampled by a cosine
-//!   distribution about the shading normal `n` of the vertex it lights: `p_ω = cosθ/π`, zero
-//!   below. Under a diffuse BSDF `f cosθ / p_ω = kd`, so a white furnace has no variance.
-//! - **Selection**: one light per vertex, chosen with probability proportional to its power
-//!   (a [`Discrete`] distribution, binary search, O(log n)): `Φ = π A lum(Le)` for a triangle (a
-//!   one-sided Lambertian emitter) and `Φ = 4π · πR² · lum(L_env)` for the environment seen by a
-//!   scene of bounding radius `R` (pbrt's estimate). Any positive choice is unbiased; power keeps
-//!   the weights tame. The pmf the pdfs divide by is exactly the frequency of each choice (whole
-//!   units of 2⁻²⁴), also with 10⁶ emitters.
+//!   distribution about `n`: `p_ω = cosθ/π`, zero below. Under a diffuse BSDF `f cosθ / p_ω =
+//!   kd`, so a white furnace has no variance.
+//! - **Which light** ([`LightChoice`], `--light-choice`): `uniform` (every light of positive
+//!   power alike), `power` (`Φ = π A lum(Le)` for an emitter, `4π · πR² · lum(L_env)` for the
+//!   environment seen by a scene of bounding radius `R`, pbrt's estimate), or `tree`: the
+//!   environment by power against all emitters, then a light BVH ([`LightTree`]: Conty Estevez
+//!   & Kulla 2018, pbrt-v4's `BVHLightSampler`) descended from the root, each child chosen in
+//!   proportion to an importance bound from the receiving point (power, distance, the emitters'
+//!   normal cone and the receiver's cosine).
+//!
+//!   Every choice is exact for the values drawn: it splits the 2²⁴ units of `u`'s resolution in
+//!   whole units (a [`Discrete`] for uniform and power; the tree splits its node's range at each
+//!   level in proportion to the two importances, at least one unit to a child of positive
+//!   importance while the range has two), so the pmf returned for a light is exactly the
+//!   frequency with which it is chosen, also from a given point. A light whose share rounds to
+//!   no unit (a tree node's range down to one unit, below ~2⁻²⁴ of the importance at that point)
+//!   has pmf 0 there: MIS then gives its BSDF-found light full weight (unbiased); with NEE alone
+//!   its contribution, below 2⁻²⁴ of the light at that point by its bound, is missed.
 //!
 //! Every pdf this module returns is per unit solid angle at the receiving point and includes
-//! the selection probability. [`Lights::light_of`] maps a BVH-order primitive to its light, so a
+//! the choice probability. [`Lights::light_of`] maps a BVH-order primitive to its emitter, so a
 //! BSDF-sampled ray that hits an emitter finds the light pdf of the same path for MIS.
 
 use crate::math::Frame;
 use crate::sampling::{
-    cosine_hemisphere_pdf, sample_cosine_hemisphere, sample_uniform_triangle, uniform_triangle_pdf,
-    Discrete,
+    bilinear_pdf, cosine_hemisphere_pdf, sample_bilinear, sample_cosine_hemisphere,
+    sample_uniform_triangle, Discrete, SphericalRectangle, SphericalTriangle, UNIT_BITS,
 };
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
+use std::sync::OnceLock;
 
 /// How light is found at a vertex (the `--lights` flag): the third axis of variance reduction.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum)]
@@ -46,34 +73,185 @@ impl std::fmt::Display for LightStrategy {
     }
 }
 
-/// Index in the primitive → light map of a primitive that is no light.
-const NO_LIGHT: u32 = u32::MAX;
+/// How a point on an emitter is chosen (the `--light-points` flag).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum)]
+pub enum LightPoints {
+    /// Uniform by area, the pdf converted to solid angle.
+    Area,
+    /// Uniform in the solid angle the emitter subtends (spherical triangles and rectangles).
+    SolidAngle,
+    /// The solid-angle map warped by the receiver's cosine at the corners (bilinear).
+    #[default]
+    Projected,
+}
 
-/// An emissive triangle.
+impl std::fmt::Display for LightPoints {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&crate::names::value_name(self))
+    }
+}
+
+/// How the light of a vertex is chosen (the `--light-choice` flag).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum)]
+pub enum LightChoice {
+    /// Every light of positive power alike.
+    Uniform,
+    /// In proportion to power.
+    Power,
+    /// A light BVH: by an importance bound from the receiving point.
+    #[default]
+    Tree,
+}
+
+impl std::fmt::Display for LightChoice {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&crate::names::value_name(self))
+    }
+}
+
+/// Below this solid angle (sr) a triangle is sampled by area (pbrt-v4's threshold).
+pub const MIN_TRIANGLE_SOLID_ANGLE: f64 = 3e-4;
+/// Below this solid angle (sr) a rectangle is sampled by area (pbrt-v4's threshold).
+pub const MIN_RECTANGLE_SOLID_ANGLE: f64 = 1e-4;
+/// Above this solid angle (sr, 99 % of the hemisphere) an emitter is sampled by area.
+pub const MAX_SOLID_ANGLE: f64 = 6.22;
+
+/// Index in the primitive → emitter map of a primitive that is no light.
+const NO_LIGHT: u32 = u32::MAX;
+/// The units of `u`'s resolution that a choice splits.
+const UNITS: u32 = 1 << UNIT_BITS;
+
+/// The shape of an emitter.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct TriangleLight {
-    /// BVH-order triangle index.
-    pub prim: u32,
-    /// The vertices.
-    pub v: [Vec3; 3],
-    /// Unit normal of the emitting side (counter-clockwise winding).
+pub enum Shape {
+    /// Vertices in counter-clockwise order about the emitting normal.
+    Triangle([Vec3; 3]),
+    /// Corner `s` and perpendicular edges `ex`, `ey`.
+    Rectangle { s: Vec3, ex: Vec3, ey: Vec3 },
+}
+
+/// One emitter: a triangle, or a rectangle made of two.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Emitter {
+    pub shape: Shape,
+    /// Unit normal of the emitting side.
     pub n: Vec3,
-    /// Area of the triangle.
     pub area: f32,
     /// Emitted radiance on the front side.
     pub emission: Vec3,
+    /// The BVH-order primitives it is made of (the second is `u32::MAX` for a triangle).
+    pub prims: [u32; 2],
 }
 
-impl TriangleLight {
+impl Emitter {
     /// The emissive triangle `v` (BVH-order primitive `prim`) of front radiance `emission`.
-    pub fn new(prim: u32, v: [Vec3; 3], emission: Vec3) -> TriangleLight {
+    pub fn triangle(prim: u32, v: [Vec3; 3], emission: Vec3) -> Emitter {
         let c = (v[1] - v[0]).cross(v[2] - v[0]);
-        TriangleLight {
-            prim,
-            v,
+        Emitter {
+            shape: Shape::Triangle(v),
             n: c.normalize_or_zero(),
             area: 0.5 * c.length(),
             emission,
+            prims: [prim, NO_LIGHT],
+        }
+    }
+
+    /// The rectangle of triangles `a` and `b` (same emission), if they share a diagonal and
+    /// make a rectangle: opposite corners sum to the same point and the edges are perpendicular,
+    /// to `1e-5` of the edge lengths plus the f32 rounding of the coordinates (8 ulps of the
+    /// largest), so only what is a rectangle up to rounding is sampled as one.
+    pub fn rectangle_of(a: &Emitter, b: &Emitter) -> Option<Emitter> {
+        let (Shape::Triangle(ta), Shape::Triangle(tb)) = (a.shape, b.shape) else {
+            return None;
+        };
+        if a.emission != b.emission || a.n.dot(b.n) < 1.0 - 1e-5 {
+            return None;
+        }
+        // the shared diagonal: two vertices of a equal to two of b; c is a's third, d b's
+        let shared: Vec<usize> = (0..3).filter(|&i| tb.contains(&ta[i])).collect();
+        let [i, j] = shared[..] else {
+            return None;
+        };
+        let c = ta[3 - i - j];
+        let d = *tb.iter().find(|v| !ta.contains(v))?;
+        let (p, q) = (ta[i], ta[j]);
+        let (ex, ey) = (p - c, q - c);
+        let (lx, ly) = (ex.length(), ey.length());
+        let rounding = 8.0
+            * f32::EPSILON
+            * [c, d, p, q]
+                .iter()
+                .map(|v| v.abs().max_element())
+                .fold(0.0, f32::max);
+        let parallelogram = (c + d - p - q).length() <= 1e-5 * (lx + ly) + rounding;
+        let perpendicular = ex.dot(ey).abs() <= (1e-5 + rounding / lx.min(ly)) * lx * ly;
+        (parallelogram && perpendicular).then(|| Emitter {
+            shape: Shape::Rectangle { s: c, ex, ey },
+            n: a.n,
+            area: ex.cross(ey).length(),
+            emission: a.emission,
+            prims: [a.prims[0], b.prims[0]],
+        })
+    }
+
+    /// Its power, `π A lum(Le)` (a one-sided Lambertian emitter).
+    pub fn power(&self) -> f32 {
+        PI * self.area * luminance(self.emission).max(0.0)
+    }
+
+    /// Its corners (3 or 4).
+    fn corners(&self) -> ([Vec3; 4], usize) {
+        match self.shape {
+            Shape::Triangle(v) => ([v[0], v[1], v[2], v[2]], 3),
+            Shape::Rectangle { s, ex, ey } => ([s, s + ex, s + ey, s + ex + ey], 4),
+        }
+    }
+
+    /// The point at `u` uniform by area.
+    fn point_by_area(&self, u: Vec2) -> Vec3 {
+        match self.shape {
+            Shape::Triangle(v) => {
+                let b = sample_uniform_triangle(u);
+                v[0] * b.x + v[1] * b.y + v[2] * (1.0 - b.x - b.y)
+            }
+            Shape::Rectangle { s, ex, ey } => s + ex * u.x + ey * u.y,
+        }
+    }
+}
+
+/// The spherical domain of an emitter seen from a point, where the spherical math is accurate.
+enum Spherical {
+    Triangle(SphericalTriangle),
+    Rectangle(SphericalRectangle),
+}
+
+impl Spherical {
+    /// `None`: sample `e` by area from `p` (too small or too large a solid angle, or none).
+    fn of(e: &Emitter, p: Vec3) -> Option<Spherical> {
+        match e.shape {
+            Shape::Triangle(v) => SphericalTriangle::new(v, p)
+                .filter(|t| (MIN_TRIANGLE_SOLID_ANGLE..=MAX_SOLID_ANGLE).contains(&t.area()))
+                .map(Spherical::Triangle),
+            Shape::Rectangle { s, ex, ey } => SphericalRectangle::new(s, ex, ey, p)
+                .filter(|r| (MIN_RECTANGLE_SOLID_ANGLE..=MAX_SOLID_ANGLE).contains(&r.area()))
+                .map(Spherical::Rectangle),
+        }
+    }
+
+    fn area(&self) -> f32 {
+        match self {
+            Spherical::Triangle(t) => t.area() as f32,
+            Spherical::Rectangle(r) => r.area() as f32,
+        }
+    }
+
+    /// The cosine weights of a bilinear warp at the corners of `u` (see the warps' docs).
+    fn weights(&self, e: &Emitter, p: Vec3, n: Vec3) -> [f32; 4] {
+        let w = |v: Vec3| n.dot((v - p).normalize_or_zero()).abs().max(0.01);
+        match (self, e.shape) {
+            (Spherical::Triangle(_), Shape::Triangle(v)) => [w(v[1]), w(v[1]), w(v[0]), w(v[2])],
+            (_, Shape::Rectangle { s, ex, ey }) => [w(s), w(s + ex), w(s + ey), w(s + ex + ey)],
+            _ => [1.0; 4],
         }
     }
 }
@@ -87,21 +265,26 @@ pub struct LightSample {
     pub dist: f32,
     /// Radiance arriving along `-wi` if nothing is in between.
     pub le: Vec3,
-    /// Probability density of `wi` per unit solid angle, selection included.
+    /// Probability density of `wi` per unit solid angle, choice included.
     pub pdf: f32,
 }
 
-/// All lights of a scene, and the distribution that chooses among them.
-#[derive(Clone, Debug, Default)]
+/// All lights of a scene, and the distributions that choose among them.
+#[derive(Debug, Default)]
 pub struct Lights {
-    /// The emissive triangles, in BVH order.
-    pub triangles: Vec<TriangleLight>,
+    /// The emitters (triangles and rectangles), in BVH order of their first primitive.
+    pub emitters: Vec<Emitter>,
     /// Radiance of the environment (zero: it is no light).
     pub environment: Vec3,
-    /// `light_index[prim]`: the light of BVH-order triangle `prim`, or [`NO_LIGHT`].
+    /// `light_index[prim]`: the emitter of BVH-order triangle `prim`, or [`NO_LIGHT`].
     light_index: Vec<u32>,
-    /// The choice of a light: each triangle light, then the environment (last).
-    choice: Discrete,
+    /// Choice by power, and uniform: each emitter, then the environment (last).
+    by_power: Discrete,
+    uniform: Discrete,
+    /// The environment's units in the tree choice (by power against all emitters).
+    environment_units: u32,
+    /// The light BVH, built at its first use.
+    tree: OnceLock<LightTree>,
 }
 
 /// Luminance (Rec. 709 weights) of linear RGB.
@@ -111,48 +294,59 @@ pub fn luminance(c: Vec3) -> f32 {
 }
 
 impl Lights {
-    /// The lights of a scene of `primitives` triangles: the emissive `triangles` (each
-    /// knowing its BVH-order primitive), and the environment of radiance `environment` lighting
-    /// a scene of bounding radius `radius`. Err with more than 2²⁴ emitters (see [`Discrete`]).
+    /// The lights of a scene of `primitives` triangles: its emissive triangles (each knowing its
+    /// BVH-order primitive; pairs that make a rectangle become one emitter), and the
+    /// environment of radiance `environment` lighting a scene of bounding radius `radius`. Err
+    /// with more than 2²⁴ lights (see [`Discrete`]).
     pub fn build(
-        triangles: Vec<TriangleLight>,
+        triangles: Vec<Emitter>,
         primitives: usize,
         environment: Vec3,
         radius: f32,
     ) -> Result<Lights, String> {
+        let emitters = pair_rectangles(triangles);
         let mut light_index = vec![NO_LIGHT; primitives];
-        for (i, t) in triangles.iter().enumerate() {
-            light_index[t.prim as usize] = i as u32;
+        for (i, e) in emitters.iter().enumerate() {
+            for &prim in e.prims.iter().filter(|&&p| p != NO_LIGHT) {
+                light_index[prim as usize] = i as u32;
+            }
         }
-        let mut power: Vec<f64> = triangles
+        let mut power: Vec<f64> = emitters.iter().map(|e| e.power() as f64).collect();
+        let env_power = (4.0 * PI * PI * radius * radius * luminance(environment).max(0.0)) as f64;
+        power.push(env_power);
+        let ones: Vec<f64> = power
             .iter()
-            .map(|t| (PI * t.area * luminance(t.emission).max(0.0)) as f64)
+            .map(|&p| if p > 0.0 { 1.0 } else { 0.0 })
             .collect();
-        power.push((4.0 * PI * PI * radius * radius * luminance(environment).max(0.0)) as f64);
+        let emitter_power: f64 = power[..emitters.len()].iter().sum();
+        let environment_units = Discrete::new(&[env_power, emitter_power])?.units(0);
         Ok(Lights {
-            triangles,
+            emitters,
             environment,
             light_index,
-            choice: Discrete::new(&power)?,
+            by_power: Discrete::new(&power)?,
+            uniform: Discrete::new(&ones)?,
+            environment_units,
+            tree: OnceLock::new(),
         })
     }
 
-    /// Number of emissive triangles.
+    /// Number of emitters.
     pub fn len(&self) -> usize {
-        self.triangles.len()
+        self.emitters.len()
     }
 
-    /// True when the scene has no emissive triangle.
+    /// True when the scene has no emitter.
     pub fn is_empty(&self) -> bool {
-        self.triangles.is_empty()
+        self.emitters.is_empty()
     }
 
     /// True when something can be sampled (an emitter, or a non-black environment).
     pub fn any(&self) -> bool {
-        self.choice.any()
+        self.by_power.any()
     }
 
-    /// The light that BVH-order triangle `prim` is, if it emits.
+    /// The emitter that BVH-order triangle `prim` belongs to, if it emits.
     #[inline]
     pub fn light_of(&self, prim: u32) -> Option<u32> {
         match self.light_index.get(prim as usize) {
@@ -161,94 +355,675 @@ impl Lights {
         }
     }
 
-    /// The probability of choosing triangle light `i` (exactly the frequency of
-    /// [`Lights::choose`]).
+    /// The light BVH (built at the first call).
+    pub fn tree(&self) -> &LightTree {
+        self.tree.get_or_init(|| LightTree::build(&self.emitters))
+    }
+
+    /// How lights are sampled with `points` and `choice`.
+    pub fn sampler(&self, points: LightPoints, choice: LightChoice) -> LightSampler<'_> {
+        LightSampler {
+            lights: self,
+            points,
+            choice,
+            tree: (choice == LightChoice::Tree && !self.emitters.is_empty()).then(|| self.tree()),
+        }
+    }
+}
+
+/// Merge the pairs of emissive triangles that make a rectangle (see [`Emitter::rectangle_of`]);
+/// the others stay triangles. Pairs are found through their shared diagonal.
+fn pair_rectangles(triangles: Vec<Emitter>) -> Vec<Emitter> {
+    use std::collections::HashMap;
+    let key = |a: Vec3, b: Vec3| {
+        let (a, b) = (
+            a.to_array().map(f32::to_bits),
+            b.to_array().map(f32::to_bits),
+        );
+        if a <= b {
+            (a, b)
+        } else {
+            (b, a)
+        }
+    };
+    let mut by_edge: HashMap<([u32; 3], [u32; 3]), Vec<usize>> = HashMap::new();
+    for (k, t) in triangles.iter().enumerate() {
+        if let Shape::Triangle(v) = t.shape {
+            for (i, j) in [(0, 1), (1, 2), (2, 0)] {
+                by_edge.entry(key(v[i], v[j])).or_default().push(k);
+            }
+        }
+    }
+    let mut used = vec![false; triangles.len()];
+    let mut out = Vec::with_capacity(triangles.len());
+    for k in 0..triangles.len() {
+        if used[k] {
+            continue;
+        }
+        used[k] = true;
+        let Shape::Triangle(v) = triangles[k].shape else {
+            continue;
+        };
+        let mut rect = None;
+        'edges: for (i, j) in [(0, 1), (1, 2), (2, 0)] {
+            for &m in &by_edge[&key(v[i], v[j])] {
+                if !used[m] {
+                    if let Some(r) = Emitter::rectangle_of(&triangles[k], &triangles[m]) {
+                        used[m] = true;
+                        rect = Some(r);
+                        break 'edges;
+                    }
+                }
+            }
+        }
+        out.push(rect.unwrap_or(triangles[k]));
+    }
+    out
+}
+
+/// How the lights are sampled in one render: the points method, the choice, and the tree.
+#[derive(Clone, Copy, Debug)]
+pub struct LightSampler<'a> {
+    lights: &'a Lights,
+    points: LightPoints,
+    choice: LightChoice,
+    tree: Option<&'a LightTree>,
+}
+
+/// A chosen light: emitter `i`, or the environment.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Chosen {
+    Emitter(u32),
+    Environment,
+}
+
+impl LightSampler<'_> {
+    /// True when something can be sampled.
+    pub fn any(&self) -> bool {
+        self.lights.any()
+    }
+
+    /// The light chosen by `u` for a receiver at `p` with normal `n`, and its probability
+    /// (exactly the frequency of this choice from `p`). `None`: nothing to choose from here.
     #[inline]
-    pub fn pmf(&self, i: u32) -> f32 {
-        self.choice.pmf(i as usize)
+    pub fn choose(&self, p: Vec3, n: Vec3, u: f32) -> Option<(Chosen, f32)> {
+        let l = self.lights;
+        let as_light = |i: usize| {
+            if i < l.emitters.len() {
+                Chosen::Emitter(i as u32)
+            } else {
+                Chosen::Environment
+            }
+        };
+        match (self.choice, self.tree) {
+            (LightChoice::Power, _) | (LightChoice::Tree, None) => l
+                .by_power
+                .sample(u)
+                .map(|i| (as_light(i), l.by_power.pmf(i))),
+            (LightChoice::Uniform, _) => {
+                l.uniform.sample(u).map(|i| (as_light(i), l.uniform.pmf(i)))
+            }
+            (LightChoice::Tree, Some(tree)) => {
+                let k = ((u * UNITS as f32) as u32).min(UNITS - 1);
+                if k < l.environment_units {
+                    return Some((
+                        Chosen::Environment,
+                        l.environment_units as f32 / UNITS as f32,
+                    ));
+                }
+                let (i, units) = tree.choose(p, n, k, l.environment_units..UNITS)?;
+                Some((Chosen::Emitter(i), units as f32 / UNITS as f32))
+            }
+        }
+    }
+
+    /// The probability that [`LightSampler::choose`] picks emitter `i` for `(p, n)`.
+    #[inline]
+    pub fn pmf(&self, p: Vec3, n: Vec3, i: u32) -> f32 {
+        let l = self.lights;
+        match (self.choice, self.tree) {
+            (LightChoice::Power, _) | (LightChoice::Tree, None) => l.by_power.pmf(i as usize),
+            (LightChoice::Uniform, _) => l.uniform.pmf(i as usize),
+            (LightChoice::Tree, Some(tree)) => {
+                tree.units(p, n, i, l.environment_units..UNITS) as f32 / UNITS as f32
+            }
+        }
     }
 
     /// The probability of choosing the environment.
     #[inline]
     pub fn environment_pmf(&self) -> f32 {
-        self.choice.pmf(self.triangles.len())
-    }
-
-    /// Choose a light with `u ∈ [0,1)`: `Some(i)` for triangle `i`, `None` for the environment
-    /// (or when nothing can be chosen: [`Lights::any`] is false).
-    #[inline]
-    pub fn choose(&self, u: f32) -> Option<u32> {
-        match self.choice.sample(u) {
-            Some(i) if i < self.triangles.len() => Some(i as u32),
-            _ => None,
+        let l = self.lights;
+        let last = l.emitters.len();
+        match (self.choice, self.tree) {
+            (LightChoice::Power, _) | (LightChoice::Tree, None) => l.by_power.pmf(last),
+            (LightChoice::Uniform, _) => l.uniform.pmf(last),
+            (LightChoice::Tree, Some(_)) => l.environment_units as f32 / UNITS as f32,
         }
     }
 
     /// Sample a light for the point `p` with shading normal `n` (on the side light is gathered
     /// from): `u_choose` picks the light, `u` the point on it (or the environment direction).
-    /// `None` when nothing is sampled or the point sees the back of the chosen triangle.
+    /// `None` when nothing is sampled or the point sees the back of the chosen emitter.
     #[inline]
     pub fn sample(&self, p: Vec3, n: Vec3, u_choose: f32, u: Vec2) -> Option<LightSample> {
-        if !self.any() {
-            return None;
-        }
-        match self.choose(u_choose) {
-            Some(i) => {
-                let t = &self.triangles[i as usize];
-                let b = sample_uniform_triangle(u);
-                let y = t.v[0] * b.x + t.v[1] * b.y + t.v[2] * (1.0 - b.x - b.y);
+        let (chosen, pmf) = self.choose(p, n, u_choose)?;
+        match chosen {
+            Chosen::Emitter(i) => {
+                let e = &self.lights.emitters[i as usize];
+                let (y, pdf) = self.point_on(e, p, n, u)?;
                 let d = y - p;
-                let dist2 = d.length_squared();
-                let dist = dist2.sqrt();
-                if dist <= 0.0 {
-                    return None;
-                }
-                let wi = d / dist;
-                let cos_l = -t.n.dot(wi);
-                if cos_l <= 0.0 {
+                let dist = d.length();
+                if dist <= 0.0 || pdf.is_nan() || pdf <= 0.0 || !pdf.is_finite() {
                     return None;
                 }
                 Some(LightSample {
-                    wi,
+                    wi: d / dist,
                     dist,
-                    le: t.emission,
-                    pdf: self.pmf(i) * uniform_triangle_pdf(t.area) * dist2 / cos_l,
+                    le: e.emission,
+                    pdf: pmf * pdf,
                 })
             }
-            None => {
+            Chosen::Environment => {
                 let local = sample_cosine_hemisphere(u);
-                let pdf = self.environment_pmf() * cosine_hemisphere_pdf(local.z);
-                if pdf <= 0.0 {
-                    return None;
-                }
-                Some(LightSample {
+                let pdf = pmf * cosine_hemisphere_pdf(local.z);
+                (pdf > 0.0).then(|| LightSample {
                     wi: Frame::from_normal(n).to_world(local),
                     dist: f32::INFINITY,
-                    le: self.environment,
+                    le: self.lights.environment,
                     pdf,
                 })
             }
         }
     }
 
-    /// The pdf per solid angle with which [`Lights::sample`] at `p` returns the point `y` of
-    /// triangle light `i` (0 when `p` sees its back).
+    /// A point on emitter `e` seen from `p` (normal `n`) at `u`, and its pdf per solid angle
+    /// (without the choice). `None` when `p` sees the emitter's back.
     #[inline]
-    pub fn triangle_pdf(&self, i: u32, p: Vec3, y: Vec3) -> f32 {
-        let t = &self.triangles[i as usize];
-        let d = y - p;
-        let dist2 = d.length_squared();
-        let cos_l = -t.n.dot(d) / dist2.sqrt();
-        if cos_l <= 0.0 || dist2 <= 0.0 {
-            return 0.0;
+    fn point_on(&self, e: &Emitter, p: Vec3, n: Vec3, u: Vec2) -> Option<(Vec3, f32)> {
+        let (corner, _) = e.corners();
+        if e.n.dot(p - corner[0]) <= 0.0 {
+            return None; // behind the emitting side (or on its plane)
         }
-        self.pmf(i) * uniform_triangle_pdf(t.area) * dist2 / cos_l
+        let spherical = match self.points {
+            LightPoints::Area => None,
+            _ => Spherical::of(e, p),
+        };
+        let Some(sph) = spherical else {
+            let y = e.point_by_area(u);
+            return Some((y, area_pdf(e, p, y)));
+        };
+        let (u, warp) = if self.points == LightPoints::Projected {
+            let w = sph.weights(e, p, n);
+            let v = sample_bilinear(u, w);
+            (v, bilinear_pdf(v, w))
+        } else {
+            (u, 1.0)
+        };
+        let y = match &sph {
+            Spherical::Triangle(t) => {
+                let w = t.sample(u);
+                let den = e.n.dot(w);
+                if den >= 0.0 {
+                    return None;
+                }
+                p + w * (e.n.dot(corner[0] - p) / den)
+            }
+            Spherical::Rectangle(r) => r.sample(u),
+        };
+        Some((y, warp / sph.area()))
     }
 
-    /// The pdf per solid angle with which [`Lights::sample`] at a point of shading normal `n`
-    /// returns the environment direction `wi`.
+    /// The pdf per solid angle with which [`LightSampler::sample`] at `p` (normal `n`) returns
+    /// the point `y` of emitter `i` (0 when `p` sees its back).
+    #[inline]
+    pub fn pdf(&self, i: u32, p: Vec3, n: Vec3, y: Vec3) -> f32 {
+        let e = &self.lights.emitters[i as usize];
+        let (corner, _) = e.corners();
+        if e.n.dot(p - corner[0]) <= 0.0 {
+            return 0.0;
+        }
+        let pmf = self.pmf(p, n, i);
+        if pmf == 0.0 {
+            return 0.0;
+        }
+        let spherical = match self.points {
+            LightPoints::Area => None,
+            _ => Spherical::of(e, p),
+        };
+        let Some(sph) = spherical else {
+            return pmf * area_pdf(e, p, y);
+        };
+        let warp = if self.points == LightPoints::Projected {
+            let u = match &sph {
+                Spherical::Triangle(t) => t.invert((y - p).normalize_or_zero()),
+                Spherical::Rectangle(r) => r.invert(y),
+            };
+            // the bilinear density at the domain point the spherical map took (the warped u)
+            bilinear_pdf(u, sph.weights(e, p, n))
+        } else {
+            1.0
+        };
+        pmf * warp / sph.area()
+    }
+
+    /// The pdf per solid angle with which [`LightSampler::sample`] at a point `p` of shading
+    /// normal `n` returns the environment direction `wi`.
     #[inline]
     pub fn environment_pdf(&self, n: Vec3, wi: Vec3) -> f32 {
         self.environment_pmf() * cosine_hemisphere_pdf(n.dot(wi))
     }
+}
+
+/// The pdf per solid angle at `p` of the point `y` of `e` sampled uniformly by area.
+#[inline]
+fn area_pdf(e: &Emitter, p: Vec3, y: Vec3) -> f32 {
+    let d = y - p;
+    let dist2 = d.length_squared();
+    let cos_l = -e.n.dot(d) / dist2.sqrt();
+    if cos_l <= 0.0 || dist2 <= 0.0 {
+        return 0.0;
+    }
+    dist2 / (e.area * cos_l)
+}
+
+/// What a light BVH node bounds of its emitters: their box, their power, the cone of their
+/// normals (axis `w`, half-angle `θ_o`) and of their emission about a normal (`θ_e`: π/2 for
+/// one-sided diffuse emitters), as pbrt-v4's `LightBounds`.
+#[derive(Clone, Copy, Debug)]
+pub struct LightBounds {
+    lo: Vec3,
+    hi: Vec3,
+    w: Vec3,
+    phi: f32,
+    cos_theta_o: f32,
+    cos_theta_e: f32,
+}
+
+impl LightBounds {
+    fn of(e: &Emitter) -> LightBounds {
+        let (c, k) = e.corners();
+        let (lo, hi) = c[..k].iter().fold(
+            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+            |(lo, hi), &v| (lo.min(v), hi.max(v)),
+        );
+        LightBounds {
+            lo,
+            hi,
+            w: e.n,
+            phi: e.power(),
+            cos_theta_o: 1.0,
+            cos_theta_e: 0.0,
+        }
+    }
+
+    fn centroid(&self) -> Vec3 {
+        0.5 * (self.lo + self.hi)
+    }
+
+    /// The union: boxes and powers add, cones merge (pbrt-v4's `DirectionCone` union).
+    fn union(a: Option<LightBounds>, b: LightBounds) -> LightBounds {
+        let Some(a) = a else {
+            return b;
+        };
+        // a powerless side bounds nothing (pbrt-v4), but its box still holds its emitters
+        let (w, cos_theta_o) = if a.phi == 0.0 {
+            (b.w, b.cos_theta_o)
+        } else if b.phi == 0.0 {
+            (a.w, a.cos_theta_o)
+        } else {
+            cone_union((a.w, a.cos_theta_o), (b.w, b.cos_theta_o))
+        };
+        LightBounds {
+            lo: a.lo.min(b.lo),
+            hi: a.hi.max(b.hi),
+            w,
+            phi: a.phi + b.phi,
+            cos_theta_o,
+            cos_theta_e: a.cos_theta_e.min(b.cos_theta_e),
+        }
+    }
+
+    /// The importance bound of these emitters for a receiver at `p` with normal `n` (pbrt-v4's
+    /// `LightBounds::Importance`): `Φ cos θ′ / d²` with `θ′` the smallest angle between the
+    /// emitters' normals and the direction to `p` over the box's directions, zero where `p` is
+    /// outside every emission cone, times the receiver's smallest cosine toward the box.
+    pub fn importance(&self, p: Vec3, n: Vec3) -> f32 {
+        let pc = self.centroid();
+        let diag = self.hi - self.lo;
+        let d2 = p.distance_squared(pc).max(diag.length() / 2.0);
+        let cos_sub = |sin_a: f32, cos_a: f32, sin_b: f32, cos_b: f32| {
+            if cos_a > cos_b {
+                1.0
+            } else {
+                cos_a * cos_b + sin_a * sin_b
+            }
+        };
+        let sin_sub = |sin_a: f32, cos_a: f32, sin_b: f32, cos_b: f32| {
+            if cos_a > cos_b {
+                0.0
+            } else {
+                sin_a * cos_b - cos_a * sin_b
+            }
+        };
+        let wi = (p - pc).normalize_or_zero();
+        let cos_w = self.w.dot(wi);
+        let sin_w = (1.0 - cos_w * cos_w).max(0.0).sqrt();
+        // the cone of directions from p that the box subtends (its bounding sphere)
+        let radius2 = (0.5 * diag).length_squared();
+        let dist2 = p.distance_squared(pc);
+        let cos_b = if dist2 < radius2 {
+            -1.0
+        } else {
+            (1.0 - radius2 / dist2).max(0.0).sqrt()
+        };
+        let sin_b = (1.0 - cos_b * cos_b).max(0.0).sqrt();
+        let sin_o = (1.0 - self.cos_theta_o * self.cos_theta_o).max(0.0).sqrt();
+        let cos_x = cos_sub(sin_w, cos_w, sin_o, self.cos_theta_o);
+        let sin_x = sin_sub(sin_w, cos_w, sin_o, self.cos_theta_o);
+        let cos_p = cos_sub(sin_x, cos_x, sin_b, cos_b);
+        if cos_p <= self.cos_theta_e {
+            return 0.0;
+        }
+        let mut importance = self.phi * cos_p / d2;
+        let cos_i = wi.dot(n).abs();
+        let sin_i = (1.0 - cos_i * cos_i).max(0.0).sqrt();
+        importance *= cos_sub(sin_i, cos_i, sin_b, cos_b);
+        importance.max(0.0)
+    }
+}
+
+/// The smallest cone holding two cones `(axis, cos half-angle)` (pbrt-v4's union).
+fn cone_union(a: (Vec3, f32), b: (Vec3, f32)) -> (Vec3, f32) {
+    let pi = std::f32::consts::PI;
+    let (theta_a, theta_b) = (a.1.clamp(-1.0, 1.0).acos(), b.1.clamp(-1.0, 1.0).acos());
+    let theta_d = a.0.dot(b.0).clamp(-1.0, 1.0).acos();
+    if (theta_d + theta_b).min(pi) <= theta_a {
+        return a;
+    }
+    if (theta_d + theta_a).min(pi) <= theta_b {
+        return b;
+    }
+    let theta_o = (theta_a + theta_d + theta_b) / 2.0;
+    if theta_o >= pi {
+        return (Vec3::Z, -1.0);
+    }
+    let theta_r = theta_o - theta_a;
+    let wr = a.0.cross(b.0);
+    if wr.length_squared() == 0.0 {
+        return (Vec3::Z, -1.0);
+    }
+    // rotate a's axis by θ_r about wr (perpendicular to it)
+    let k = wr.normalize();
+    let w = a.0 * theta_r.cos() + k.cross(a.0) * theta_r.sin();
+    (w.normalize_or_zero(), theta_o.cos())
+}
+
+/// A light BVH over the emitters (pbrt-v4's `BVHLightSampler`): binary, depth first (a node's
+/// first child follows it), built top down by the bucketed surface-area-orientation heuristic
+/// of Conty Estevez & Kulla.
+#[derive(Debug)]
+pub struct LightTree {
+    nodes: Vec<TreeNode>,
+    /// Per emitter, the path from the root to its leaf: bit `k` set means the second child at
+    /// depth `k`.
+    trail: Vec<u64>,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct TreeNode {
+    bounds: LightBounds,
+    /// A leaf's emitter, or an interior node's second child.
+    child_or_light: u32,
+    leaf: bool,
+}
+
+/// The deepest the tree may grow (the trail's bits); past 48 levels splits are by count.
+const MAX_TREE_DEPTH: u32 = 63;
+
+impl LightTree {
+    /// The tree over `emitters` (at least one).
+    pub fn build(emitters: &[Emitter]) -> LightTree {
+        let mut items: Vec<(u32, LightBounds)> = emitters
+            .iter()
+            .enumerate()
+            .map(|(i, e)| (i as u32, LightBounds::of(e)))
+            .collect();
+        let mut tree = LightTree {
+            nodes: Vec::with_capacity(2 * emitters.len()),
+            trail: vec![0; emitters.len()],
+        };
+        if !items.is_empty() {
+            let n = items.len();
+            tree.build_range(&mut items, 0..n, 0, 0);
+        }
+        tree
+    }
+
+    /// Number of nodes.
+    pub fn len(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// True without emitters.
+    pub fn is_empty(&self) -> bool {
+        self.nodes.is_empty()
+    }
+
+    /// Bytes the nodes and trails take.
+    pub fn memory_bytes(&self) -> usize {
+        std::mem::size_of_val(self.nodes.as_slice()) + std::mem::size_of_val(self.trail.as_slice())
+    }
+
+    fn build_range(
+        &mut self,
+        items: &mut [(u32, LightBounds)],
+        range: std::ops::Range<usize>,
+        trail: u64,
+        depth: u32,
+    ) -> LightBounds {
+        let (start, end) = (range.start, range.end);
+        if end - start == 1 {
+            let (light, b) = items[start];
+            self.trail[light as usize] = trail;
+            self.nodes.push(TreeNode {
+                bounds: b,
+                child_or_light: light,
+                leaf: true,
+            });
+            return b;
+        }
+        let mid = if depth >= 48 {
+            (start + end) / 2
+        } else {
+            split(&mut items[start..end]).map_or((start + end) / 2, |m| start + m)
+        };
+        let at = self.nodes.len();
+        self.nodes.push(TreeNode {
+            bounds: items[start].1,
+            child_or_light: 0,
+            leaf: false,
+        });
+        let b0 = self.build_range(items, start..mid, trail, depth + 1);
+        let second = self.nodes.len() as u32;
+        let b1 = self.build_range(
+            items,
+            mid..end,
+            trail | (1u64 << depth.min(MAX_TREE_DEPTH)),
+            depth + 1,
+        );
+        let b = LightBounds::union(Some(b0), b1);
+        self.nodes[at] = TreeNode {
+            bounds: b,
+            child_or_light: second,
+            leaf: false,
+        };
+        b
+    }
+
+    /// The units of `range` that node `at`'s two children get from `(p, n)`: the split point
+    /// (`range.start..split` to the first child), or `None` when neither has importance.
+    #[inline]
+    fn split_units(
+        &self,
+        at: usize,
+        p: Vec3,
+        n: Vec3,
+        range: &std::ops::Range<u32>,
+    ) -> Option<u32> {
+        let node = &self.nodes[at];
+        let c0 = self.nodes[at + 1].bounds.importance(p, n);
+        let c1 = self.nodes[node.child_or_light as usize]
+            .bounds
+            .importance(p, n);
+        let len = range.end - range.start;
+        if !(c0 > 0.0 || c1 > 0.0) {
+            return None;
+        }
+        let share = if c1 <= 0.0 {
+            len
+        } else if c0 <= 0.0 {
+            0
+        } else if len < 2 {
+            if c0 >= c1 {
+                len
+            } else {
+                0
+            }
+        } else {
+            let s = (len as f64 * c0 as f64 / (c0 as f64 + c1 as f64)).round() as u32;
+            s.clamp(1, len - 1)
+        };
+        Some(range.start + share)
+    }
+
+    /// The emitter chosen by unit `k` of `range` for a receiver at `p` (normal `n`), and its
+    /// units (its probability times 2²⁴).
+    pub fn choose(
+        &self,
+        p: Vec3,
+        n: Vec3,
+        k: u32,
+        mut range: std::ops::Range<u32>,
+    ) -> Option<(u32, u32)> {
+        let mut at = 0usize;
+        loop {
+            let node = &self.nodes[at];
+            if node.leaf {
+                // (a lone emitter is not tested: a point behind it is refused by the caller)
+                return (!range.is_empty())
+                    .then_some((node.child_or_light, range.end - range.start));
+            }
+            let s = self.split_units(at, p, n, &range)?;
+            if k < s {
+                range.end = s;
+                at += 1;
+            } else {
+                range.start = s;
+                at = node.child_or_light as usize;
+            }
+            if range.is_empty() {
+                return None;
+            }
+        }
+    }
+
+    /// The units of `range` that emitter `i` gets from `(p, n)`: what [`LightTree::choose`]
+    /// gives it, following its path.
+    pub fn units(&self, p: Vec3, n: Vec3, i: u32, mut range: std::ops::Range<u32>) -> u32 {
+        let mut trail = self.trail[i as usize];
+        let mut at = 0usize;
+        loop {
+            let node = &self.nodes[at];
+            if node.leaf {
+                return range.end - range.start;
+            }
+            let Some(s) = self.split_units(at, p, n, &range) else {
+                return 0;
+            };
+            if trail & 1 == 0 {
+                range.end = s;
+                at += 1;
+            } else {
+                range.start = s;
+                at = node.child_or_light as usize;
+            }
+            trail >>= 1;
+            if range.is_empty() {
+                return 0;
+            }
+        }
+    }
+}
+
+/// The split of `items` (two or more) by the bucketed surface-area-orientation heuristic
+/// (pbrt-v4's `buildBVH`, 12 buckets per axis): the items are partitioned in place and the
+/// first part's length returned; `None` when no split helps (the caller halves by count).
+fn split(items: &mut [(u32, LightBounds)]) -> Option<usize> {
+    const BUCKETS: usize = 12;
+    let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+    let (mut clo, mut chi) = (lo, hi);
+    for (_, b) in items.iter() {
+        lo = lo.min(b.lo);
+        hi = hi.max(b.hi);
+        clo = clo.min(b.centroid());
+        chi = chi.max(b.centroid());
+    }
+    let diag = hi - lo;
+    let bucket = |c: Vec3, dim: usize| {
+        let t = (c[dim] - clo[dim]) / (chi[dim] - clo[dim]);
+        ((BUCKETS as f32 * t) as usize).min(BUCKETS - 1)
+    };
+    let mut best: Option<(f32, usize, usize)> = None;
+    for dim in 0..3 {
+        if chi[dim] == clo[dim] {
+            continue;
+        }
+        let mut buckets: [Option<LightBounds>; BUCKETS] = [None; BUCKETS];
+        for (_, b) in items.iter() {
+            let k = bucket(b.centroid(), dim);
+            buckets[k] = Some(LightBounds::union(buckets[k], *b));
+        }
+        let merge = |r: &[Option<LightBounds>]| {
+            r.iter()
+                .flatten()
+                .fold(None, |acc, b| Some(LightBounds::union(acc, *b)))
+        };
+        for i in 0..BUCKETS - 1 {
+            let (Some(b0), Some(b1)) = (merge(&buckets[..=i]), merge(&buckets[i + 1..])) else {
+                continue;
+            };
+            let cost = cost(&b0, diag, dim) + cost(&b1, diag, dim);
+            if cost > 0.0 && best.is_none_or(|(c, _, _)| cost < c) {
+                best = Some((cost, dim, i));
+            }
+        }
+    }
+    let (_, dim, at) = best?;
+    let mut k = 0;
+    for i in 0..items.len() {
+        if bucket(items[i].1.centroid(), dim) <= at {
+            items.swap(i, k);
+            k += 1;
+        }
+    }
+    (k > 0 && k < items.len()).then_some(k)
+}
+
+/// pbrt-v4's `EvaluateCost`: power × the measure of the cone of emitted directions × the box's
+/// surface area, with a penalty for splitting across the box's short axes.
+fn cost(b: &LightBounds, diag: Vec3, dim: usize) -> f32 {
+    let pi = std::f32::consts::PI;
+    let theta_o = b.cos_theta_o.clamp(-1.0, 1.0).acos();
+    let theta_e = b.cos_theta_e.clamp(-1.0, 1.0).acos();
+    let theta_w = (theta_o + theta_e).min(pi);
+    let sin_o = (1.0 - b.cos_theta_o * b.cos_theta_o).max(0.0).sqrt();
+    let m_omega = 2.0 * pi * (1.0 - b.cos_theta_o)
+        + pi / 2.0
+            * (2.0 * theta_w * sin_o - (theta_o - 2.0 * theta_w).cos() - 2.0 * theta_o * sin_o
+                + b.cos_theta_o);
+    let kr = diag.max_element() / diag[dim].max(1e-30);
+    let d = b.hi - b.lo;
+    let area = 2.0 * (d.x * d.y + d.y * d.z + d.z * d.x);
+    b.phi * m_omega * kr * area
 }

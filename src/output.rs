@@ -9,7 +9,7 @@
 use crate::error::{Error, Result};
 use crate::film::Film;
 use crate::image_io::{write_exr, write_png, Format, RgbImage};
-use crate::lights::LightStrategy;
+use crate::lights::{LightChoice, LightPoints, LightStrategy};
 use crate::names::{parse_value, value_name};
 use crate::render::{RenderSettings, RenderStats};
 use crate::scene::Scene;
@@ -116,6 +116,8 @@ impl RenderMetadata {
         put("sampler", value_name(&self.strategy.sampler));
         put("directions", value_name(&self.strategy.directions));
         put("lights", value_name(&self.strategy.lights));
+        put("light_points", value_name(&self.strategy.light_points));
+        put("light_choice", value_name(&self.strategy.light_choice));
         put("strategy", self.strategy.to_string());
         put("max_depth", self.max_depth.to_string());
         put("render_seconds", format!("{:.6}", self.render_seconds));
@@ -222,6 +224,15 @@ impl RenderMetadata {
                 lights: match a.get("lights") {
                     Some(l) => parse_value(l, "lights")?,
                     None => LightStrategy::Bsdf,
+                },
+                // and before these switches, points uniform by area chosen by power
+                light_points: match a.get("light_points") {
+                    Some(p) => parse_value(p, "light points")?,
+                    None => LightPoints::Area,
+                },
+                light_choice: match a.get("light_choice") {
+                    Some(c) => parse_value(c, "light choice")?,
+                    None => LightChoice::Power,
                 },
             },
             max_depth: num("max_depth", req(a, "max_depth")?)?,

@@ -491,6 +491,8 @@ fn render_with<S: Sampler>(
         max_depth: settings.max_depth,
         directions: settings.strategy.directions,
         lights: settings.strategy.lights,
+        light_points: settings.strategy.light_points,
+        light_choice: settings.strategy.light_choice,
         time_traces: settings.time_traces,
     };
     let tiles_x = settings.width.div_ceil(TILE);

@@ -9,9 +9,14 @@
 //! importance = (independent, phong, bsdf), combined = (stratified, phong, bsdf) — and the light
 //! axis on top of the best of them: nee = (stratified, phong, nee), mis = (stratified, phong,
 //! mis), the default.
+//!
+//! Light sampling has two more switches, how a point on a light is placed ([`LightPoints`]) and
+//! how the light is chosen ([`LightChoice`]); a name that leaves them out takes their defaults
+//! (`stratified+phong+mis`), a name that gives them has five parts
+//! (`stratified+phong+mis+area+power`), and the presets use the defaults.
 
 use crate::bsdf::Directions;
-use crate::lights::LightStrategy;
+use crate::lights::{LightChoice, LightPoints, LightStrategy};
 use crate::names::{parse_value, value_name, value_names};
 use crate::sampler::SamplerKind;
 use clap::ValueEnum;
@@ -25,6 +30,10 @@ pub struct Strategy {
     pub directions: Directions,
     /// How light is found at a vertex.
     pub lights: LightStrategy,
+    /// How a point on a light is placed.
+    pub light_points: LightPoints,
+    /// How the light of a vertex is chosen.
+    pub light_choice: LightChoice,
 }
 
 impl Default for Strategy {
@@ -35,21 +44,29 @@ impl Default for Strategy {
 }
 
 impl Strategy {
-    /// Every point of the grid, samplers outermost, in the enums' order.
+    /// Every point of the grid of the first three axes (the light switches at their defaults),
+    /// samplers outermost, in the enums' order.
     pub fn all() -> Vec<Strategy> {
         let mut v = Vec::new();
         for &sampler in SamplerKind::value_variants() {
             for &directions in Directions::value_variants() {
                 for &lights in LightStrategy::value_variants() {
-                    v.push(Strategy {
-                        sampler,
-                        directions,
-                        lights,
-                    });
+                    v.push(Strategy::of(sampler, directions, lights));
                 }
             }
         }
         v
+    }
+
+    /// The point of the grid of these three axes, the light switches at their defaults.
+    pub fn of(sampler: SamplerKind, directions: Directions, lights: LightStrategy) -> Strategy {
+        Strategy {
+            sampler,
+            directions,
+            lights,
+            light_points: LightPoints::default(),
+            light_choice: LightChoice::default(),
+        }
     }
 
     /// The preset that names this point, if any.
@@ -60,28 +77,38 @@ impl Strategy {
             .find(|p| p.strategy() == *self)
     }
 
-    /// `SAMPLER+DIRECTIONS+LIGHTS`, whether or not a preset names it.
+    /// `SAMPLER+DIRECTIONS+LIGHTS`, then `+POINTS+CHOICE` unless both are the defaults, whether
+    /// or not a preset names it.
     pub fn axes_name(&self) -> String {
-        format!(
+        let mut s = format!(
             "{}+{}+{}",
             value_name(&self.sampler),
             value_name(&self.directions),
             value_name(&self.lights)
-        )
+        );
+        if (self.light_points, self.light_choice) != Default::default() {
+            s += &format!(
+                "+{}+{}",
+                value_name(&self.light_points),
+                value_name(&self.light_choice)
+            );
+        }
+        s
     }
 
-    /// Parse a preset name, `SAMPLER+DIRECTIONS+LIGHTS`, or `SAMPLER+DIRECTIONS` (lights
-    /// `bsdf`, as before the light axis existed).
+    /// Parse a preset name, `SAMPLER+DIRECTIONS+LIGHTS+POINTS+CHOICE`,
+    /// `SAMPLER+DIRECTIONS+LIGHTS` (the light switches at their defaults), or
+    /// `SAMPLER+DIRECTIONS` (lights `bsdf`, as before the light axis existed).
     pub fn parse(s: &str) -> Result<Strategy, String> {
         let s = s.trim();
         if let Ok(p) = Preset::from_str(s, false) {
             return Ok(p.strategy());
         }
         let parts: Vec<&str> = s.split('+').collect();
-        if !(2..=3).contains(&parts.len()) {
+        if ![2, 3, 5].contains(&parts.len()) {
             return Err(format!(
                 "unknown strategy '{s}': use a preset ({}) or SAMPLER+DIRECTIONS+LIGHTS \
-                 (e.g. stratified+cosine+mis)",
+                 (e.g. stratified+cosine+mis), with +POINTS+CHOICE for the light switches",
                 value_names::<Preset>()
             ));
         }
@@ -92,6 +119,14 @@ impl Strategy {
                 Some(l) => parse_value(l, "lights")?,
                 None => LightStrategy::Bsdf,
             },
+            light_points: match parts.get(3) {
+                Some(p) => parse_value(p, "light points")?,
+                None => LightPoints::default(),
+            },
+            light_choice: match parts.get(4) {
+                Some(c) => parse_value(c, "light choice")?,
+                None => LightChoice::default(),
+            },
         })
     }
 
@@ -100,17 +135,25 @@ impl Strategy {
     /// the default's without a preset; an axis that contradicts the preset is an error.
     pub fn from_parts(
         preset: Option<Preset>,
-        sampler: Option<SamplerKind>,
-        directions: Option<Directions>,
-        lights: Option<LightStrategy>,
+        (sampler, directions, lights): (
+            Option<SamplerKind>,
+            Option<Directions>,
+            Option<LightStrategy>,
+        ),
+        (points, choice): (Option<LightPoints>, Option<LightChoice>),
     ) -> Result<Strategy, String> {
+        let with_light = |s: Strategy| Strategy {
+            light_points: points.unwrap_or(s.light_points),
+            light_choice: choice.unwrap_or(s.light_choice),
+            ..s
+        };
         let Some(preset) = preset else {
             let d = Strategy::default();
-            return Ok(Strategy {
-                sampler: sampler.unwrap_or(d.sampler),
-                directions: directions.unwrap_or(d.directions),
-                lights: lights.unwrap_or(d.lights),
-            });
+            return Ok(with_light(Strategy::of(
+                sampler.unwrap_or(d.sampler),
+                directions.unwrap_or(d.directions),
+                lights.unwrap_or(d.lights),
+            )));
         };
         let st = preset.strategy();
         let conflict = |flag: &str, uses: String, asked: String| {
@@ -126,7 +169,7 @@ impl Strategy {
         if let Some(x) = lights.filter(|&x| x != st.lights) {
             return Err(conflict("lights", st.lights.to_string(), x.to_string()));
         }
-        Ok(st)
+        Ok(with_light(st))
     }
 
     /// A comma-separated list of strategies ([`Strategy::parse`] each), or `all`.
@@ -142,11 +185,16 @@ impl Strategy {
         format!(
             "Strategies, comma-separated: presets ({}), or SAMPLER+DIRECTIONS+LIGHTS with SAMPLER \
              one of {}, DIRECTIONS one of {} and LIGHTS one of {} (SAMPLER+DIRECTIONS means \
-             +bsdf); `all` for every combination",
+             +bsdf), optionally +POINTS+CHOICE with POINTS one of {} and CHOICE one of {} \
+             (default {}+{}); `all` for every combination of the first three",
             value_names::<Preset>(),
             value_names::<SamplerKind>(),
             value_names::<Directions>(),
-            value_names::<LightStrategy>()
+            value_names::<LightStrategy>(),
+            value_names::<LightPoints>(),
+            value_names::<LightChoice>(),
+            value_name(&LightPoints::default()),
+            value_name(&LightChoice::default())
         )
     }
 }
@@ -191,11 +239,7 @@ impl Preset {
             Preset::Nee => (SamplerKind::Stratified, Directions::Phong, L::Nee),
             Preset::Mis => (SamplerKind::Stratified, Directions::Phong, L::Mis),
         };
-        Strategy {
-            sampler,
-            directions,
-            lights,
-        }
+        Strategy::of(sampler, directions, lights)
     }
 
     /// The mission's four presets (BSDF sampling only), in the order experiments report them.
@@ -250,6 +294,17 @@ mod tests {
             .contains("lights"));
         assert!(Strategy::parse("a+b+c+d").is_err());
         assert!(Strategy::parse("best").is_err());
+        let s = Strategy::parse("stratified+phong+mis+area+power").unwrap();
+        assert_eq!(
+            (s.light_points, s.light_choice),
+            (LightPoints::Area, LightChoice::Power)
+        );
+        assert_eq!(s.to_string(), "stratified+phong+mis+area+power");
+        assert_eq!(Strategy::parse(&s.to_string()).unwrap(), s);
+        assert!(Strategy::parse("stratified+phong+mis+area").is_err());
+        assert!(Strategy::parse("stratified+phong+mis+area+x")
+            .unwrap_err()
+            .contains("light choice"));
         assert_eq!(Preset::mission().len(), 4);
         assert_eq!(Strategy::default(), Preset::Mis.strategy());
     }

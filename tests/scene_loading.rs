@@ -61,7 +61,7 @@ fn obj_with_mtl_loads_triangles_materials_and_emitters() {
     // the lamp triangle (0,1,0) (1,1,0) (0.5,2,0.5): area = |e1 × e2| / 2
     let e1 = Vec3::new(1.0, 0.0, 0.0);
     let e2 = Vec3::new(0.5, 1.0, 0.5);
-    assert!((s.lights.triangles[0].area - 0.5 * e1.cross(e2).length()).abs() < 1e-6);
+    assert!((s.lights.emitters[0].area - 0.5 * e1.cross(e2).length()).abs() < 1e-6);
     assert!(s.warnings.iter().any(|w| w.contains("nosuchmaterial")));
     assert!(s
         .warnings
@@ -202,7 +202,12 @@ fn shipped_scenes_load() {
     assert_eq!(cb.triangle_count(), 32);
     assert_eq!(cb.defaults.spp, Some(64));
     // the light faces down: its triangles' normals point to -y
-    for e in &cb.lights.triangles {
-        assert!(cb.shading[e.prim as usize].ng.y < -0.99);
+    // and its two triangles are sampled as one rectangle
+    assert_eq!(cb.lights.emitters.len(), 1);
+    let lamp = &cb.lights.emitters[0];
+    assert!(matches!(lamp.shape, vrpt::lights::Shape::Rectangle { .. }));
+    assert!(lamp.n.y < -0.99);
+    for prim in lamp.prims {
+        assert!(cb.shading[prim as usize].ng.y < -0.99);
     }
 }

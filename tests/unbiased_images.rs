@@ -80,11 +80,7 @@ fn check_all_combinations(name: &str, scene: &Scene, max_depth: u32) {
             scene,
             &RenderSettings {
                 spp: 131072,
-                strategy: Strategy {
-                    sampler,
-                    directions,
-                    lights: LightStrategy::Bsdf,
-                },
+                strategy: Strategy::of(sampler, directions, LightStrategy::Bsdf),
                 seed,
                 ..base.clone()
             },
@@ -110,11 +106,7 @@ fn check_all_combinations(name: &str, scene: &Scene, max_depth: u32) {
                 &ref_combined
             };
             let settings = RenderSettings {
-                strategy: Strategy {
-                    sampler,
-                    directions,
-                    lights: LightStrategy::Bsdf,
-                },
+                strategy: Strategy::of(sampler, directions, LightStrategy::Bsdf),
                 seed,
                 ..base.clone()
             };
@@ -192,10 +184,182 @@ fn big_light_broad_lobe_cornell_box_agrees_for_every_sampler_and_direction_strat
     check_all_combinations("big-light cornell Ns 20", &scene, 8);
 }
 
+/// Region statistics of a film: per region of `block`² pixels (row-major) and channel, the
+/// region's mean (the average of its pixels' means), its variance (`Σ v_i / block⁴`: pixels are
+/// independent) and its pooled Kish ESS `(ΣS)²/ΣQ`.
+fn regions(film: &Film, block: u32) -> Vec<[(f64, f64, f64); 3]> {
+    let (nx, ny) = (film.width / block, film.height / block);
+    let mut out = Vec::new();
+    for by in 0..ny {
+        for bx in 0..nx {
+            let mut acc = [(0.0f64, 0.0f64, 0.0f64, 0.0f64); 3];
+            for y in by * block..(by + 1) * block {
+                for x in bx * block..(bx + 1) * block {
+                    let i = film.index(x, y);
+                    let (m, v, e) = (
+                        film.mean(i),
+                        film.variance_of_mean(i),
+                        film.effective_samples(i),
+                    );
+                    let n = film.count(i) as f64;
+                    for c in 0..3 {
+                        let s = m[c] * n;
+                        acc[c].0 += m[c];
+                        acc[c].1 += v[c];
+                        acc[c].2 += s;
+                        acc[c].3 += if e[c] > 0.0 { s * s / e[c] } else { 0.0 };
+                    }
+                }
+            }
+            let k = (block * block) as f64;
+            out.push(std::array::from_fn(|c| {
+                let (m, v, s, q) = acc[c];
+                (m / k, v / (k * k), if q > 0.0 { s * s / q } else { 0.0 })
+            }));
+        }
+    }
+    out
+}
+
+/// The outcome of a region z-test.
+struct RegionTest {
+    /// Region-channels tested (pilot ESS ≥ 300, or zero variance in both and equal means).
+    tested: usize,
+    /// Region-channels in all.
+    total: usize,
+    /// Tested region-channels above the bound.
+    failed: usize,
+    /// Stouffer's combination of the signed z of the tested region-channels, `Σz/√(3n)` over
+    /// n regions: under no bias each z is ~N(0, 1) and the three channels of a region at most
+    /// perfectly correlated, so the sum's variance is at most `3n` and this is N(0, ≤1). A
+    /// bias of one sign over the image adds up: it is the power check's statistic.
+    combined: f64,
+}
+
+/// The region z-test of one render of `strategy` (settings `base`, seed `seed`) against
+/// `reference` (its [`regions`]): z of every region-channel whose pilot ESS is at least 300,
+/// with the larger of the render's and the pilot's variance (see the doc of the Cornell test),
+/// against the bound `z_crit`. A region-channel with zero variance in the render, the pilot
+/// and the reference (the black background) must match exactly and counts as tested.
+fn region_z_test(
+    name: &str,
+    scene: &Scene,
+    (base, block): (&RenderSettings, u32),
+    reference: &[[(f64, f64, f64); 3]],
+    (strategy, seed): (Strategy, u64),
+    z_crit: f64,
+) -> RegionTest {
+    let settings = RenderSettings {
+        strategy,
+        seed,
+        ..base.clone()
+    };
+    let (film, pilot) = render_with_pilot(scene, &settings);
+    let (m, p) = (regions(&film, block), regions(&pilot, block));
+    let (mut worst, mut tested, mut failed, mut sum_z) = (0.0f64, 0usize, 0usize, 0.0f64);
+    let mut regions_tested = std::collections::BTreeSet::new();
+    for k in 0..m.len() {
+        for c in 0..3 {
+            let (mean, own_var, _) = m[k][c];
+            let (_, pilot_var, ess) = p[k][c];
+            let var = own_var.max(pilot_var);
+            let (rmean, rvar, _) = reference[k][c];
+            if var + rvar == 0.0 {
+                assert!(
+                    (mean - rmean).abs() <= 1e-6 * rmean.abs().max(1e-6),
+                    "{name} {strategy}: region {k} channel {c}: {mean} vs {rmean} without variance"
+                );
+                tested += 1;
+                continue;
+            }
+            if ess < 300.0 {
+                continue;
+            }
+            tested += 1;
+            regions_tested.insert(k);
+            let z = (mean - rmean) / (var + rvar).sqrt();
+            sum_z += z;
+            worst = worst.max(z.abs());
+            if z.abs() > z_crit {
+                failed += 1;
+                eprintln!(
+                    "{name} {strategy}: region {k} channel {c}: {mean:.5} vs reference \
+                     {rmean:.5} (σ {:.5}, pooled ESS {ess:.0}, z {z:.2})",
+                    (var + rvar).sqrt()
+                );
+            }
+        }
+    }
+    let combined = sum_z / (3.0 * regions_tested.len().max(1) as f64).sqrt();
+    eprintln!(
+        "{name} {strategy}: worst |z| {worst:.2} over {tested} of {} region-channels, \
+         {failed} above {z_crit:.2}, combined z {combined:.2}",
+        m.len() * 3
+    );
+    RegionTest {
+        tested,
+        total: m.len() * 3,
+        failed,
+        combined,
+    }
+}
+
+/// Asserts that `t` (a render that should agree) tested at least 75% of the region-channels,
+/// so the test cannot quietly test nothing, and that none failed.
+fn assert_agrees(t: &RegionTest, strategy: Strategy) {
+    assert!(
+        4 * t.tested >= 3 * t.total,
+        "{strategy}: only {} of {} region-channels testable",
+        t.tested,
+        t.total
+    );
+    assert_eq!(t.failed, 0, "{strategy} disagrees with the reference");
+}
+
+/// Asserts that `t` (a render with every light sample 1/1.05 too small) is caught: its
+/// combined z is below `−z_crit` (a one-sided bias of 5% over the image; the statistic is
+/// N(0, ≤1) without bias, see [`RegionTest::combined`]).
+fn assert_caught(t: &RegionTest, strategy: Strategy, z_crit: f64) {
+    assert!(
+        t.combined < -z_crit,
+        "{strategy}: a 5% error in the light pdf must be caught (combined z {:.2}, bound {z_crit:.2})",
+        t.combined
+    );
+}
+
+/// A copy of shipped scene `name` in `dir` with every `Ke` of its MTL divided by 1.05: under
+/// NEE exactly the image a light pdf 5% too high would give (every light sample divided by
+/// 1.05 too many), except on the lights themselves.
+fn dimmed_lights(dir: &Path, name: &str) -> Scene {
+    let src = common::shipped_path(name);
+    for e in std::fs::read_dir(&src).unwrap() {
+        let e = e.unwrap();
+        std::fs::copy(e.path(), dir.join(e.file_name())).unwrap();
+    }
+    let mtl_name = format!("{name}.mtl");
+    let mtl = std::fs::read_to_string(src.join(&mtl_name)).unwrap();
+    let dimmed: Vec<String> = mtl
+        .lines()
+        .map(|l| match l.trim().strip_prefix("Ke ") {
+            Some(v) => {
+                let k: Vec<f32> = v.split_whitespace().map(|x| x.parse().unwrap()).collect();
+                format!("Ke {} {} {}", k[0] / 1.05, k[1] / 1.05, k[2] / 1.05)
+            }
+            None => l.to_string(),
+        })
+        .collect();
+    assert!(mtl.contains("Ke "), "{name} has emitters");
+    std::fs::write(dir.join(&mtl_name), dimmed.join("\n")).unwrap();
+    vrpt::scene::load(dir).unwrap()
+}
+
 /// The **shipped** Cornell box (its small light, the Ns 200 glossy box) under every light
-/// strategy: BSDF sampling, next-event estimation and MIS (with phong directions and the
-/// stratified sampler, and MIS and NEE with other direction strategies and the independent
-/// sampler) agree with a 65536-spp MIS reference.
+/// strategy and way of placing points on the light: BSDF sampling, next-event estimation and
+/// MIS (with phong directions and the stratified sampler, and MIS and NEE with other direction
+/// strategies and the independent sampler), and NEE with points by area, solid angle and
+/// projected solid angle, agree with a 65536-spp MIS reference. (How lights are chosen cannot
+/// matter here: the box has one light, a rectangle; the glossy plates' test below holds the
+/// choices.)
 ///
 /// The test compares **regions** of 4×4 pixels (16 regions of a 16×16 image, 3 channels):
 /// a region's mean is the average of its pixels' means, its variance `Σ v_i / 16²` (pixels are
@@ -214,14 +378,17 @@ fn big_light_broad_lobe_cornell_box_agrees_for_every_sampler_and_direction_strat
 /// one region of one seed set of five, at pooled ESS 87,000, while the same strategy's worst
 /// z over the other seed sets was 2.3) — and then its own variance is high too. A render that
 /// missed them is low by less than the pilot's σ, which holds them. Taking the larger keeps
-/// the test valid both ways; a bias shifts whole regions of every seed set, and the power check
-/// below still fails by z = 16.
+/// the test valid both ways; a bias shifts whole regions of every seed set, and the power
+/// checks below still fail.
 ///
 /// Power: a wrong light pdf under NEE (every light sample divided by 1.05 too many, which in
 /// `nee` mode is exactly the image of a light with Ke/1.05 everywhere but on the light itself)
-/// must fail in most regions.
+/// must be caught by the combined z of the regions, for each way of placing points, at a
+/// quarter of the spp (measured with area points: 20 of 47 region-channels beyond the bound
+/// by themselves, the worst at z = −14).
 #[test]
 fn shipped_cornell_box_agrees_for_every_light_strategy() {
+    use vrpt::lights::{LightChoice, LightPoints};
     use vrpt::sampler::SamplerKind::{Independent, Stratified};
     let scene = common::shipped("cornell-box");
     let (w, block) = (16u32, 4u32);
@@ -240,129 +407,132 @@ fn shipped_cornell_box_agrees_for_every_light_strategy() {
             ..base.clone()
         },
     );
+    let with_points = |s: Strategy, p: LightPoints| Strategy {
+        light_points: p,
+        light_choice: LightChoice::Tree,
+        ..s
+    };
+    let nee = Strategy::of(Stratified, Directions::Phong, LightStrategy::Nee);
     let strategies = [
-        (Stratified, Directions::Phong, LightStrategy::Bsdf),
-        (Stratified, Directions::Phong, LightStrategy::Nee),
-        (Stratified, Directions::Phong, LightStrategy::Mis),
-        (Independent, Directions::Uniform, LightStrategy::Mis),
-        (Independent, Directions::Cosine, LightStrategy::Nee),
+        Strategy::of(Stratified, Directions::Phong, LightStrategy::Bsdf),
+        nee,
+        Strategy::of(Stratified, Directions::Phong, LightStrategy::Mis),
+        Strategy::of(Independent, Directions::Uniform, LightStrategy::Mis),
+        Strategy::of(Independent, Directions::Cosine, LightStrategy::Nee),
+        with_points(nee, LightPoints::Area),
+        with_points(nee, LightPoints::SolidAngle),
+        with_points(
+            Strategy::of(Stratified, Directions::Phong, LightStrategy::Mis),
+            LightPoints::Area,
+        ),
     ];
     let nb = (w / block) as usize;
     let tests = strategies.len() * nb * nb * 3;
     let z_crit = normal_critical_value(sidak(1e-3, tests));
-    // (region mean, its variance, pooled ESS) per region and channel
-    let regions = |film: &Film| -> Vec<[(f64, f64, f64); 3]> {
-        let mut out = Vec::new();
-        for by in 0..nb as u32 {
-            for bx in 0..nb as u32 {
-                let mut acc = [(0.0f64, 0.0f64, 0.0f64, 0.0f64); 3];
-                for y in by * block..(by + 1) * block {
-                    for x in bx * block..(bx + 1) * block {
-                        let i = film.index(x, y);
-                        let (m, v, e) = (
-                            film.mean(i),
-                            film.variance_of_mean(i),
-                            film.effective_samples(i),
-                        );
-                        let n = film.count(i) as f64;
-                        for c in 0..3 {
-                            let s = m[c] * n;
-                            acc[c].0 += m[c];
-                            acc[c].1 += v[c];
-                            acc[c].2 += s;
-                            acc[c].3 += if e[c] > 0.0 { s * s / e[c] } else { 0.0 };
-                        }
-                    }
-                }
-                let k = (block * block) as f64;
-                out.push(std::array::from_fn(|c| {
-                    let (m, v, s, q) = acc[c];
-                    (m / k, v / (k * k), if q > 0.0 { s * s / q } else { 0.0 })
-                }));
-            }
-        }
-        out
-    };
-    let reference = regions(&reference);
-    let judge = |name: &str, scene: &Scene, strategy: Strategy, seed: u64| {
-        let settings = RenderSettings {
-            strategy,
-            seed,
-            ..base.clone()
-        };
-        let (film, pilot) = render_with_pilot(scene, &settings);
-        let (m, p) = (regions(&film), regions(&pilot));
-        let (mut worst, mut tested, mut failed) = (0.0f64, 0usize, 0usize);
-        for k in 0..m.len() {
-            for c in 0..3 {
-                let (mean, own_var, _) = m[k][c];
-                let (_, pilot_var, ess) = p[k][c];
-                // the larger of the two variance estimates (see the doc comment)
-                let var = own_var.max(pilot_var);
-                let (rmean, rvar, _) = reference[k][c];
-                if ess < 300.0 || var + rvar == 0.0 {
-                    continue;
-                }
-                tested += 1;
-                let z = (mean - rmean).abs() / (var + rvar).sqrt();
-                worst = worst.max(z);
-                if z > z_crit {
-                    failed += 1;
-                    eprintln!(
-                        "{name} {strategy}: region {k} channel {c}: {mean:.5} vs reference \
-                         {rmean:.5} (σ {:.5}, pooled ESS {ess:.0}, z {z:.2})",
-                        (var + rvar).sqrt()
-                    );
-                }
-            }
-        }
-        eprintln!(
-            "{name} {strategy}: worst |z| {worst:.2} over {tested} of {} region-channels, \
-             {failed} above {z_crit:.2}",
-            m.len() * 3
-        );
-        assert!(
-            tested as f64 >= 0.75 * (m.len() * 3) as f64,
-            "{name} {strategy}: only {tested} region-channels testable"
-        );
-        (tested, failed)
-    };
-    for (k, &(sampler, directions, lights)) in strategies.iter().enumerate() {
-        let strategy = Strategy {
-            sampler,
-            directions,
-            lights,
-        };
-        let (_, failed) = judge(
+    let reference = regions(&reference, block);
+    for (k, &strategy) in strategies.iter().enumerate() {
+        let seed = common::seed(20 + 1000 * k as u64);
+        let t = region_z_test(
             "shipped cornell",
             &scene,
-            strategy,
-            common::seed(20 + 1000 * k as u64),
+            (&base, block),
+            &reference,
+            (strategy, seed),
+            z_crit,
         );
-        assert_eq!(failed, 0, "{strategy} disagrees with the reference");
+        assert_agrees(&t, strategy);
     }
-    // the power check: NEE with every light sample 1/1.05 too small
+    // the power checks: NEE with every light sample 1/1.05 too small, for each points method
     let dir = tempfile::tempdir().unwrap();
-    let src = common::cornell_path();
-    for f in ["cornell-box.obj", "scene.toml"] {
-        std::fs::copy(src.join(f), dir.path().join(f)).unwrap();
-    }
-    let mtl = std::fs::read_to_string(src.join("cornell-box.mtl")).unwrap();
-    assert!(mtl.contains("Ke 17 12 4"));
-    let mtl = mtl.replace(
-        "Ke 17 12 4",
-        &format!("Ke {} {} {}", 17.0 / 1.05, 12.0 / 1.05, 4.0 / 1.05),
-    );
-    std::fs::write(dir.path().join("cornell-box.mtl"), mtl).unwrap();
-    let wrong = vrpt::scene::load(dir.path()).unwrap();
-    let strategy = Strategy {
-        sampler: Stratified,
-        directions: Directions::Phong,
-        lights: LightStrategy::Nee,
+    let wrong = dimmed_lights(dir.path(), "cornell-box");
+    let quarter = RenderSettings {
+        spp: base.spp / 4,
+        ..base.clone()
     };
-    let (tested, failed) = judge("light pdf x1.05", &wrong, strategy, common::seed(20 + 1000));
-    assert!(
-        2 * failed >= tested,
-        "a 5% error in the light pdf must fail most regions ({failed} of {tested})"
+    for points in [
+        LightPoints::Area,
+        LightPoints::SolidAngle,
+        LightPoints::Projected,
+    ] {
+        let strategy = with_points(nee, points);
+        let t = region_z_test(
+            "light pdf x1.05",
+            &wrong,
+            (&quarter, block),
+            &reference,
+            (strategy, common::seed(20 + 1000)),
+            z_crit,
+        );
+        assert_caught(&t, strategy, z_crit);
+    }
+}
+
+/// The glossy plates' four lights (spheres of 20 triangles, radii 0.05 to 1.2, equal powers)
+/// with every way of choosing lights: uniform (each triangle alike: the small lights'
+/// triangles carry far more power), power and the light tree agree with a 65536-spp MIS
+/// reference, by the region test of the Cornell box (16×12 pixels in 4×4 regions, 16384 spp,
+/// depth 4), and each is caught with its light pdf 5% off. Agreement is tested under MIS, which
+/// holds the pmf twice (the light sample's weight and the BSDF hit's): under NEE alone the
+/// plates' sharp reflections of the small lights leave pooled ESS of 40–250 in a third of the
+/// regions. The power check is under NEE, where dimmed lights are exactly a wrong pdf.
+#[test]
+fn glossy_plates_agree_for_every_light_choice() {
+    use vrpt::lights::LightChoice;
+    use vrpt::sampler::SamplerKind::Stratified;
+    let scene = common::shipped("glossy-plates");
+    let (block, mis) = (
+        4u32,
+        Strategy::of(Stratified, Directions::Phong, LightStrategy::Mis),
     );
+    let base = RenderSettings {
+        width: 16,
+        height: 12,
+        spp: 16384,
+        max_depth: 4,
+        ..Default::default()
+    };
+    let (reference, _) = render_quiet(
+        &scene,
+        &RenderSettings {
+            spp: 65536,
+            seed: common::seed(3000),
+            strategy: mis,
+            ..base.clone()
+        },
+    );
+    let reference = regions(&reference, block);
+    let choices = [LightChoice::Uniform, LightChoice::Power, LightChoice::Tree];
+    let z_crit = normal_critical_value(sidak(1e-3, choices.len() * reference.len() * 3));
+    let dir = tempfile::tempdir().unwrap();
+    let wrong = dimmed_lights(dir.path(), "glossy-plates");
+    let quarter = RenderSettings {
+        spp: base.spp / 4,
+        ..base.clone()
+    };
+    for (k, choice) in choices.into_iter().enumerate() {
+        let with_choice = |lights| Strategy {
+            light_choice: choice,
+            ..Strategy::of(Stratified, Directions::Phong, lights)
+        };
+        let seed = common::seed(40 + 1000 * k as u64);
+        let t = region_z_test(
+            "glossy plates",
+            &scene,
+            (&base, block),
+            &reference,
+            (with_choice(LightStrategy::Mis), seed),
+            z_crit,
+        );
+        assert_agrees(&t, with_choice(LightStrategy::Mis));
+        let strategy = with_choice(LightStrategy::Nee);
+        let t = region_z_test(
+            "light pdf x1.05",
+            &wrong,
+            (&quarter, block),
+            &reference,
+            (strategy, seed),
+            z_crit,
+        );
+        assert_caught(&t, strategy, z_crit);
+    }
 }

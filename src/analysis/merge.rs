@@ -53,6 +53,14 @@ pub fn merge(inputs: &[MergeInput]) -> Result<(RgbImage, RenderMetadata)> {
                 m.strategy.directions != first.strategy.directions,
             ),
             ("lights", m.strategy.lights != first.strategy.lights),
+            (
+                "light_points",
+                m.strategy.light_points != first.strategy.light_points,
+            ),
+            (
+                "light_choice",
+                m.strategy.light_choice != first.strategy.light_choice,
+            ),
         ];
         if let Some((key, _)) = differs.iter().find(|(_, d)| *d) {
             let a = m.to_attributes();

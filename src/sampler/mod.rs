@@ -17,8 +17,8 @@ pub use stratified::{grid_shape, permute_index, StratifiedSampler};
 
 use glam::{UVec2, Vec2};
 
-/// The largest f32 below 1: every sampler's values lie in `[0, ONE_MINUS_EPSILON]`.
-pub const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
+/// Every sampler's values lie in `[0, ONE_MINUS_EPSILON]`.
+pub use crate::sampling::ONE_MINUS_EPSILON;
 
 /// A source of sample points for one pixel sample at a time.
 pub trait Sampler: Clone + Send + Sync {

@@ -16,7 +16,7 @@ use crate::accel::{Accel, Hit};
 use crate::bsdf::Bsdf;
 use crate::camera::CameraDesc;
 use crate::error::{Error, Result};
-use crate::lights::{Lights, TriangleLight};
+use crate::lights::{Emitter, Lights};
 use crate::material::Material;
 use crate::math::hash_words;
 use description::{Description, RenderSection};
@@ -159,7 +159,7 @@ impl Scene {
             .filter(|(_, s)| materials[s.material as usize].is_emissive())
             .map(|(prim, s)| {
                 let emission = materials[s.material as usize].emission;
-                TriangleLight::new(prim as u32, accel.vertices(prim as u32), emission)
+                Emitter::triangle(prim as u32, accel.vertices(prim as u32), emission)
             })
             .collect();
         let lights =
