@@ -121,5 +121,72 @@ fn warps(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, samplers, samplers_in_pixels, warps);
+/// One light sample per receiver on the shipped night hall (160 emitters): choose a light
+/// (uniform, power, tree) and place a point on it (area, solid angle, projected), for 4096
+/// receivers spread over the floor and walls. `choose` alone is the cost of a tree lookup;
+/// `pmf` is what MIS pays for a BSDF sample that hits an emitter.
+fn lights(c: &mut Criterion) {
+    use glam::Vec3;
+    use vrpt::lights::{LightChoice, LightPoints};
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/night-hall");
+    let scene = vrpt::scene::load(std::path::Path::new(path)).expect("the shipped night hall");
+    let receivers: Vec<(Vec3, Vec3, f32, Vec2)> = (0..SAMPLES)
+        .map(|i| {
+            let (a, b) = (
+                (i as f32 + 0.5) / SAMPLES as f32,
+                ((i * 7919) % SAMPLES) as f32 / SAMPLES as f32,
+            );
+            let (p, n) = match i % 3 {
+                0 | 1 => (Vec3::new(8.0 * a - 4.0, 0.0, -60.0 * b), Vec3::Y),
+                _ => (Vec3::new(-4.0, 4.4 * a, -60.0 * b), Vec3::X),
+            };
+            (p, n, b, Vec2::new(a, 1.0 - b))
+        })
+        .collect();
+    let mut g = c.benchmark_group("lights");
+    g.warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(2))
+        .throughput(Throughput::Elements(SAMPLES as u64));
+    for choice in [LightChoice::Uniform, LightChoice::Power, LightChoice::Tree] {
+        let sampler = scene.lights.sampler(LightPoints::Area, choice);
+        g.bench_function(format!("choose_{choice}"), |b| {
+            b.iter(|| {
+                receivers
+                    .iter()
+                    .filter_map(|&(p, n, u, _)| sampler.choose(p, n, u))
+                    .map(|(_, pmf)| pmf)
+                    .sum::<f32>()
+            })
+        });
+    }
+    let tree = scene.lights.sampler(LightPoints::Area, LightChoice::Tree);
+    g.bench_function("pmf_tree", |b| {
+        b.iter(|| {
+            receivers
+                .iter()
+                .enumerate()
+                .map(|(i, &(p, n, _, _))| tree.pmf(p, n, (i % 160) as u32))
+                .sum::<f32>()
+        })
+    });
+    for points in [
+        LightPoints::Area,
+        LightPoints::SolidAngle,
+        LightPoints::Projected,
+    ] {
+        let sampler = scene.lights.sampler(points, LightChoice::Tree);
+        g.bench_function(format!("sample_{points}_tree"), |b| {
+            b.iter(|| {
+                receivers
+                    .iter()
+                    .filter_map(|&(p, n, u, v)| sampler.sample(p, n, u, v))
+                    .map(|s| s.pdf)
+                    .sum::<f32>()
+            })
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, samplers, samplers_in_pixels, warps, lights);
 criterion_main!(benches);

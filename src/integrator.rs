@@ -117,7 +117,7 @@ pub const TIMED_RAY_EVERY: u64 = 16;
 /// per incoherent ray through 4 million triangles); longer intervals are preemption.
 const MAX_TRACE_NS: u64 = 10_000;
 
-/// What an empty interval of [`timed`] measures (the clock read's own cost), in nanoseconds:
+/// What an empty interval of `timed` measures (the clock read's own cost), in nanoseconds:
 /// the mean of 10,000 empty intervals, measured once per process.
 pub fn clock_overhead_ns() -> f64 {
     static OVERHEAD: std::sync::OnceLock<f64> = std::sync::OnceLock::new();

@@ -689,46 +689,87 @@ impl LightBounds {
     /// emitters' normals and the direction to `p` over the box's directions, zero where `p` is
     /// outside every emission cone, times the receiver's smallest cosine toward the box.
     pub fn importance(&self, p: Vec3, n: Vec3) -> f32 {
-        let pc = self.centroid();
-        let diag = self.hi - self.lo;
-        let d2 = p.distance_squared(pc).max(diag.length() / 2.0);
-        let cos_sub = |sin_a: f32, cos_a: f32, sin_b: f32, cos_b: f32| {
+        NodeBounds::of(self).importance(p, n)
+    }
+}
+
+/// A [`LightBounds`] as the tree's descent reads it: what the importance needs, computed once
+/// at build time (centre, squared bounding radius, the distance floor, the cone's sine).
+#[derive(Clone, Copy, Debug)]
+struct NodeBounds {
+    centre: Vec3,
+    /// Squared radius of the box's bounding sphere.
+    radius2: f32,
+    /// The floor of the squared distance: half the box's diagonal (pbrt-v4).
+    min_d2: f32,
+    w: Vec3,
+    phi: f32,
+    cos_theta_o: f32,
+    sin_theta_o: f32,
+    cos_theta_e: f32,
+}
+
+impl NodeBounds {
+    fn of(b: &LightBounds) -> NodeBounds {
+        let diag = b.hi - b.lo;
+        NodeBounds {
+            centre: b.centroid(),
+            radius2: (0.5 * diag).length_squared(),
+            min_d2: diag.length() / 2.0,
+            w: b.w,
+            phi: b.phi,
+            cos_theta_o: b.cos_theta_o,
+            sin_theta_o: (1.0 - b.cos_theta_o * b.cos_theta_o).max(0.0).sqrt(),
+            cos_theta_e: b.cos_theta_e,
+        }
+    }
+
+    /// The importance bound of these emitters for a receiver at `p` with normal `n` (pbrt-v4's
+    /// `LightBounds::Importance`): `Φ cos θ′ / d²` with `θ′` the smallest angle between the
+    /// emitters' normals and the direction to `p` over the box's directions, zero where `p` is
+    /// outside every emission cone, times the receiver's smallest cosine toward the box. Angles
+    /// are subtracted as (sine, cosine) pairs, without trigonometry.
+    #[inline]
+    fn importance(&self, p: Vec3, n: Vec3) -> f32 {
+        // cos(a − b) and sin(a − b), clamped at 0 when b ≥ a
+        #[inline(always)]
+        fn cos_sub(sin_a: f32, cos_a: f32, sin_b: f32, cos_b: f32) -> f32 {
             if cos_a > cos_b {
                 1.0
             } else {
                 cos_a * cos_b + sin_a * sin_b
             }
-        };
-        let sin_sub = |sin_a: f32, cos_a: f32, sin_b: f32, cos_b: f32| {
+        }
+        #[inline(always)]
+        fn sin_sub(sin_a: f32, cos_a: f32, sin_b: f32, cos_b: f32) -> f32 {
             if cos_a > cos_b {
                 0.0
             } else {
                 sin_a * cos_b - cos_a * sin_b
             }
-        };
-        let wi = (p - pc).normalize_or_zero();
-        let cos_w = self.w.dot(wi);
+        }
+        let v = p - self.centre;
+        let dist2 = v.length_squared();
+        let wi = v * dist2.sqrt().recip();
+        let cos_w = if dist2 > 0.0 { self.w.dot(wi) } else { 1.0 };
         let sin_w = (1.0 - cos_w * cos_w).max(0.0).sqrt();
         // the cone of directions from p that the box subtends (its bounding sphere)
-        let radius2 = (0.5 * diag).length_squared();
-        let dist2 = p.distance_squared(pc);
-        let cos_b = if dist2 < radius2 {
+        let cos_b = if dist2 < self.radius2 {
             -1.0
         } else {
-            (1.0 - radius2 / dist2).max(0.0).sqrt()
+            (1.0 - self.radius2 / dist2).max(0.0).sqrt()
         };
         let sin_b = (1.0 - cos_b * cos_b).max(0.0).sqrt();
-        let sin_o = (1.0 - self.cos_theta_o * self.cos_theta_o).max(0.0).sqrt();
-        let cos_x = cos_sub(sin_w, cos_w, sin_o, self.cos_theta_o);
-        let sin_x = sin_sub(sin_w, cos_w, sin_o, self.cos_theta_o);
+        let cos_x = cos_sub(sin_w, cos_w, self.sin_theta_o, self.cos_theta_o);
+        let sin_x = sin_sub(sin_w, cos_w, self.sin_theta_o, self.cos_theta_o);
         let cos_p = cos_sub(sin_x, cos_x, sin_b, cos_b);
         if cos_p <= self.cos_theta_e {
             return 0.0;
         }
-        let mut importance = self.phi * cos_p / d2;
-        let cos_i = wi.dot(n).abs();
+        let cos_i = if dist2 > 0.0 { wi.dot(n).abs() } else { 1.0 };
         let sin_i = (1.0 - cos_i * cos_i).max(0.0).sqrt();
-        importance *= cos_sub(sin_i, cos_i, sin_b, cos_b);
+        let importance =
+            self.phi * cos_p * cos_sub(sin_i, cos_i, sin_b, cos_b) / dist2.max(self.min_d2);
         importance.max(0.0)
     }
 }
@@ -772,7 +813,7 @@ pub struct LightTree {
 
 #[derive(Clone, Copy, Debug)]
 struct TreeNode {
-    bounds: LightBounds,
+    bounds: NodeBounds,
     /// A leaf's emitter, or an interior node's second child.
     child_or_light: u32,
     leaf: bool,
@@ -827,7 +868,7 @@ impl LightTree {
             let (light, b) = items[start];
             self.trail[light as usize] = trail;
             self.nodes.push(TreeNode {
-                bounds: b,
+                bounds: NodeBounds::of(&b),
                 child_or_light: light,
                 leaf: true,
             });
@@ -840,7 +881,7 @@ impl LightTree {
         };
         let at = self.nodes.len();
         self.nodes.push(TreeNode {
-            bounds: items[start].1,
+            bounds: NodeBounds::of(&items[start].1),
             child_or_light: 0,
             leaf: false,
         });
@@ -854,7 +895,7 @@ impl LightTree {
         );
         let b = LightBounds::union(Some(b0), b1);
         self.nodes[at] = TreeNode {
-            bounds: b,
+            bounds: NodeBounds::of(&b),
             child_or_light: second,
             leaf: false,
         };
@@ -891,7 +932,8 @@ impl LightTree {
                 0
             }
         } else {
-            let s = (len as f64 * c0 as f64 / (c0 as f64 + c1 as f64)).round() as u32;
+            // len · c0/(c0 + c1), rounded (len ≤ 2²⁴ is exact in f64)
+            let s = (len as f64 * c0 as f64 / (c0 as f64 + c1 as f64) + 0.5) as u32;
             s.clamp(1, len - 1)
         };
         Some(range.start + share)

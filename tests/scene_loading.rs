@@ -193,7 +193,12 @@ fn bad_input_gives_its_error() {
 
 #[test]
 fn shipped_scenes_load() {
-    for name in ["cornell-box", "glossy-plates", "checker-plane"] {
+    for name in [
+        "cornell-box",
+        "glossy-plates",
+        "checker-plane",
+        "night-hall",
+    ] {
         let s = common::shipped(name);
         assert!(!s.lights.is_empty(), "{name} has emitters");
         assert!(s.warnings.is_empty(), "{name}: {:?}", s.warnings);
@@ -202,7 +207,15 @@ fn shipped_scenes_load() {
     assert_eq!(cb.triangle_count(), 32);
     assert_eq!(cb.defaults.spp, Some(64));
     // the light faces down: its triangles' normals point to -y
-    // and its two triangles are sampled as one rectangle
+    // the night hall's 160 lights are rectangles, each of two triangles
+    let hall = common::shipped("night-hall");
+    assert_eq!(hall.lights.emitters.len(), 160);
+    assert!(hall
+        .lights
+        .emitters
+        .iter()
+        .all(|e| matches!(e.shape, vrpt::lights::Shape::Rectangle { .. })));
+    // and the box's lamp's two triangles are sampled as one rectangle
     assert_eq!(cb.lights.emitters.len(), 1);
     let lamp = &cb.lights.emitters[0];
     assert!(matches!(lamp.shape, vrpt::lights::Shape::Rectangle { .. }));

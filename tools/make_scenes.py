@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Generate the vrpt test scenes under scenes/.
 
-Writes four scene folders, each holding NAME.obj, NAME.mtl and scene.toml:
+Writes five scene folders, each holding NAME.obj, NAME.mtl and scene.toml:
 
   scenes/cornell-box/    the classic Cornell box from the published Cornell
                          measurements (mm), with a glossy tall box.
@@ -12,6 +12,8 @@ Writes four scene folders, each holding NAME.obj, NAME.mtl and scene.toml:
                          (a pure 2D pixel-integration / antialiasing test).
   scenes/lit-checker/    a diffuse checkerboard lit by one large, close area
                          light (a 4D pixel x light-point integral).
+  scenes/night-hall/     a long hall lit by 160 lights of different sizes,
+                         powers and facings (the many-light scene).
 
 The files under scenes/ are committed output of this script; edit the script
 and rerun it rather than editing them by hand:
@@ -549,6 +551,100 @@ def lit_checker():
     return m
 
 
+def night_hall():
+    """A long hall lit by 160 lights of different sizes, powers and facings.
+
+    60 m long, 8 m wide, 5 m high, along -z from the camera.  Two rows of
+    30 small ceiling lamps (0.4 x 0.4, facing down) every 2 m; 20 warm wall
+    sconces on each side (0.3 x 0.2, facing into the hall) every 3 m at
+    1.8 m; and cove lights: 30 strips on each side (1.8 x 0.3, on a ledge
+    0.5 m below the ceiling, facing up), which wash the ceiling.  The coves
+    carry ~90% of the power, yet nothing below the ledges sees them (they
+    face away), and a point near the camera gets most of its light from the
+    few lamps near it: a light chosen by power alone is mostly wasted.  Every
+    light is a rectangle, so its two triangles are sampled as one.
+    """
+    name = "night-hall"
+    m = Mesh(name)
+    m.material("floor", (0.45, 0.42, 0.38))
+    m.material("wall", (0.6, 0.6, 0.6))
+    m.material("ceiling", (0.3, 0.3, 0.3))
+    m.material("ledge", (0.5, 0.5, 0.5))
+    m.material("lamp", (0.0, 0.0, 0.0), ke=(6.0, 6.0, 5.4))
+    m.material("sconce", (0.0, 0.0, 0.0), ke=(6.0, 3.6, 1.6))
+    m.material("cove", (0.0, 0.0, 0.0), ke=(11.0, 12.0, 14.0))
+    x0, x1, y1, z0, z1 = -4.0, 4.0, 5.0, 2.0, -60.0
+    inside = (0.0, 2.5, -30.0)
+    m.group("floor", "floor")
+    m.face([(x0, 0.0, z0), (x1, 0.0, z0), (x1, 0.0, z1), (x0, 0.0, z1)],
+           direction=(0, 1, 0))
+    m.group("ceiling", "ceiling")
+    m.face([(x0, y1, z0), (x1, y1, z0), (x1, y1, z1), (x0, y1, z1)],
+           direction=(0, -1, 0))
+    m.group("walls", "wall")
+    m.face([(x0, 0.0, z0), (x0, y1, z0), (x0, y1, z1), (x0, 0.0, z1)],
+           direction=(1, 0, 0))
+    m.face([(x1, 0.0, z0), (x1, y1, z0), (x1, y1, z1), (x1, 0.0, z1)],
+           direction=(-1, 0, 0))
+    m.face([(x0, 0.0, z1), (x1, 0.0, z1), (x1, y1, z1), (x0, y1, z1)],
+           direction=(0, 0, 1))
+    m.face([(x0, 0.0, z0), (x1, 0.0, z0), (x1, y1, z0), (x0, y1, z0)],
+           direction=(0, 0, -1))
+    # the ledges under the coves: a slab 0.4 wide along each wall, its top at
+    # yl (the coves lie on it), its underside and edge seen from the hall
+    yl, ledge = 4.5, 0.4
+    m.group("ledges", "ledge")
+    for xw, xe in ((x0, x0 + ledge), (x1, x1 - ledge)):
+        into = 1.0 if xe > xw else -1.0
+        m.face([(xw, yl - 0.1, z0), (xe, yl - 0.1, z0), (xe, yl - 0.1, z1),
+                (xw, yl - 0.1, z1)], direction=(0, -1, 0))
+        m.face([(xe, yl - 0.1, z0), (xe, yl, z0), (xe, yl, z1),
+                (xe, yl - 0.1, z1)], direction=(into, 0, 0))
+        m.face([(xw, yl, z0), (xe, yl, z0), (xe, yl, z1), (xw, yl, z1)],
+               direction=(0, 1, 0))
+    lights = 0
+    m.group("lamps", "lamp")
+    for i in range(30):
+        z = -1.0 - 2.0 * i
+        for x in (-2.0, 2.0):
+            m.face([(x - 0.2, y1 - 0.01, z - 0.2), (x + 0.2, y1 - 0.01, z - 0.2),
+                    (x + 0.2, y1 - 0.01, z + 0.2), (x - 0.2, y1 - 0.01, z + 0.2)],
+                   direction=(0, -1, 0))
+            lights += 1
+    m.group("sconces", "sconce")
+    for i in range(20):
+        z = -2.5 - 3.0 * i
+        for x, facing in ((x0 + 0.01, 1.0), (x1 - 0.01, -1.0)):
+            m.face([(x, 1.7, z - 0.15), (x, 1.9, z - 0.15), (x, 1.9, z + 0.15),
+                    (x, 1.7, z + 0.15)], direction=(facing, 0, 0))
+            lights += 1
+    m.group("coves", "cove")
+    for i in range(30):
+        z = -1.0 - 2.0 * i
+        for xa, xb in ((x0 + 0.05, x0 + 0.35), (x1 - 0.35, x1 - 0.05)):
+            m.face([(xa, yl + 0.01, z - 0.9), (xb, yl + 0.01, z - 0.9),
+                    (xb, yl + 0.01, z + 0.9), (xa, yl + 0.01, z + 0.9)],
+                   direction=(0, 1, 0))
+            lights += 1
+    assert lights == 160, lights
+    # the power split the docstring states (area x mean of Ke)
+    power = {"lamps": 60 * 0.16 * 5.8, "sconces": 40 * 0.06 * 3.73,
+             "coves": 60 * 0.54 * 12.3}
+    assert power["coves"] / sum(power.values()) > 0.85, power
+    # the room faces face the inside
+    for g in m.groups[:3]:
+        for f in g[2]:
+            p = [tuple(float(x) for x in m.verts[i - 1]) for i in f]
+            for n in fan_normals(p):
+                assert dot(n, sub(inside, centroid(p))) > 0.0
+
+    folder = os.path.join(SCENES, name)
+    m.write(folder)
+    write_toml(folder, name, (0.0, 1.7, 1.0), (0.0, 1.4, -30.0), 60.0,
+               (0.0, 0.0, 0.0), 192, 108, 16, 5)
+    return m
+
+
 README = """\
 # vrpt test scenes
 
@@ -566,6 +662,10 @@ Generated by `tools/make_scenes.py` (committed output; regenerate with
   with `--lights nee` and max depth 2 each pixel is a 4D integral (pixel area
   x point on the light), where per-dimension strata stall and joint (Sobol)
   points do not.
+- `night-hall/`: a 60 m hall lit by 160 lights (ceiling lamps, wall sconces,
+  and cove strips on ledges that carry most of the power but face up, away
+  from everything below them); the many-light scene, where choosing lights by power fails and the
+  light tree (`--light-choice tree`) does not.
 """
 
 
@@ -574,7 +674,8 @@ def main():
     counts = [("cornell-box", cornell_box()),
               ("glossy-plates", glossy_plates()),
               ("checker-plane", checker_plane()),
-              ("lit-checker", lit_checker())]
+              ("lit-checker", lit_checker()),
+              ("night-hall", night_hall())]
     with open(os.path.join(SCENES, "README.md"), "w") as fh:
         fh.write(README)
     for name, mesh in counts:

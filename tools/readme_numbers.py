@@ -84,8 +84,8 @@ PRESET_LIGHTS = {"independent": "bsdf", "stratified": "bsdf", "importance": "bsd
 
 
 def lights_of(strategy):
-    """The light strategy of a strategy's name (a preset, or SAMPLER+DIRECTIONS+LIGHTS)."""
-    return strategy.split("+")[-1] if "+" in strategy else PRESET_LIGHTS[strategy]
+    """The light strategy of a strategy's name (a preset, or SAMPLER+DIRECTIONS+LIGHTS[+POINTS+CHOICE])."""
+    return strategy.split("+")[2] if "+" in strategy else PRESET_LIGHTS[strategy]
 
 
 def render_speed(scene, strategy, extra=()):
@@ -192,7 +192,7 @@ def veach():
 def lit_checker():
     scene = "scenes/lit-checker"
     ref = cached_render("lc-ref", scene, "--spp", 16384, "--sampler", "sobol", "--lights", "nee", "--seed", 1000)
-    strategies = "independent+cosine+nee,stratified+cosine+nee,sobol+cosine+nee"
+    strategies = ",".join(f"{s}+cosine+nee+area+power" for s in ("independent", "stratified", "sobol"))
     print(f"`vrpt converge {scene} --reference lc-ref.exr --runs 4 --strategies {strategies} "
           "--spp 4,16,64,256,1024` (reference: 16384 spp, Sobol, NEE):\n")
     c = converge_json(scene, "--reference", ref, "--runs", 4, "--strategies", strategies, "--spp", "4,16,64,256,1024")
@@ -201,6 +201,63 @@ def lit_checker():
         at = {p["spp"]: p["mse"] for p in c["points"] if p["strategy"] == s["strategy"]}
         rows.append([s["strategy"].split("+")[0], f"{s['mse_slope']:+.2f}", g(at[4]), g(at[64]), g(at[1024])])
     print(table(["sampler", "MSE slope", "MSE at 4 spp", "at 64", "at 1024"], rows))
+
+
+@section("lights")
+def lights():
+    """Points on a light (area, solid angle, projected solid angle) on the Cornell box and
+    lit-checker, and the choice of light (uniform, power, tree) on the night hall and the glossy
+    plates, at equal spp and equal time; and what a light sample costs (the `lights` bench)."""
+    points = ("area", "solid-angle", "projected")
+    cases = [("scenes/cornell-box", cached_render("cb-ref", "scenes/cornell-box", "--spp", 4096, "--seed", 77),
+              "stratified+phong+mis", "cb-ref.exr"),
+             ("scenes/lit-checker",
+              cached_render("lc-ref", "scenes/lit-checker", "--spp", 16384, "--sampler", "sobol", "--lights", "nee",
+                            "--seed", 1000),
+              "sobol+cosine+nee", "lc-ref.exr")]
+    for scene, ref, base, refname in cases:
+        strategies = ",".join(f"{base}+{p}+tree" for p in points)
+        print(f"`vrpt compare {scene} --reference {refname} --strategies {strategies} --spp N --runs 4` "
+              "for N = 16 and 256, and `--spp 16 --equal-time 2`:\n")
+        at = {n: compare_json(scene, "--reference", ref, "--strategies", strategies, "--spp", n, "--runs", 4)
+              for n in (16, 256)}
+        et = compare_json(scene, "--reference", ref, "--strategies", strategies, "--spp", 16, "--runs", 4,
+                          "--equal-time", 2)
+        rows = []
+        for k, p in enumerate(points):
+            a, b, t = at[16]["rows"][k], at[256]["rows"][k], et["rows"][k]
+            rows.append([p, g(a["mse"]), g(b["mse"]), f"{g(t['mse'])} ({t['spp']:.0f} spp)"])
+        # (no time column: the runs of one strategy follow each other, so a drift of the
+        # machine would show as a cost; the equal-time runs show the cost in spp reached)
+        print(table(["points", "MSE at 16 spp", "at 256 spp", "MSE at equal time (2 s)"], rows) + "\n")
+    choices = ("uniform", "power", "tree")
+    hall_ref = cached_render("nh-ref", "scenes/night-hall", "--spp", 4096, "--seed", 999)
+    gp_ref = cached_render("gp-ref", "scenes/glossy-plates", "--spp", 1024)
+    for scene, ref, refname in (("scenes/night-hall", hall_ref, "nh-ref.exr"),
+                                ("scenes/glossy-plates", gp_ref, "gp-ref.exr")):
+        for lights in ("nee", "mis"):
+            strategies = ",".join(f"stratified+phong+{lights}+projected+{c}" for c in choices)
+            print(f"`vrpt compare {scene} --reference {refname} --strategies {strategies} --spp 16 --runs 4`, "
+                  "and with `--equal-time 2`:\n")
+            a = compare_json(scene, "--reference", ref, "--strategies", strategies, "--spp", 16, "--runs", 4)
+            b = compare_json(scene, "--reference", ref, "--strategies", strategies, "--spp", 16, "--runs", 4,
+                             "--equal-time", 2)
+            power = next(x for x in a["rows"] if x["strategy"].endswith("+power"))["mse"]
+            power_t = next(x for x in b["rows"] if x["strategy"].endswith("+power"))["mse"]
+            rows = []
+            for c, ra, rb in zip(choices, a["rows"], b["rows"]):
+                rows.append([c, g(ra["mse"]), f"{power / ra['mse']:.1f}×", f"{ra['seconds']:.2f}",
+                             f"{g(rb['mse'])} ({rb['spp']:.0f} spp)", f"{power_t / rb['mse']:.1f}×"])
+            print(table([f"choice ({lights})", "MSE at 16 spp", "vs power", "time (s)", "MSE at equal time (2 s)",
+                         "vs power"], rows) + "\n")
+    print("`cargo bench --bench sampling -- lights` (one light sample per receiver, 160 emitters):\n")
+    r = run(["cargo", "bench", "-q", "--bench", "sampling", "--", "lights"])
+    rows = []
+    for name, lo in re.findall(r"lights/(\S+)\s+time:\s+\[[0-9.]+ \S+ ([0-9.]+ \S+)", r.stdout):
+        value, unit = lo.split()
+        ns = float(value) * {"ns": 1, "µs": 1e3, "us": 1e3, "ms": 1e6}[unit] / 4096
+        rows.append([name, f"{ns:.0f}"])
+    print(table(["operation", "ns per receiver"], rows))
 
 
 @section("scaling")

@@ -29,11 +29,20 @@ $vrpt render scenes/cornell-box --spp 64 --seed 1 -q --strategy combined \
 $vrpt render scenes/cornell-box --spp 64 --seed 1 -q -o "$out/cornell-box-mis-64spp.png"
 
 # Sobol against padded strata on lit-checker (README "Stratifying whole paths"): a 16384-spp
-# Sobol reference, then independent / stratified / Sobol with NEE at 4..1024 spp, 4 runs each.
+# Sobol reference, then independent / stratified / Sobol with NEE at 4..1024 spp, 4 runs each,
+# with points uniform by area on the light (the 4D integrand with edges the section is about).
 $vrpt render scenes/lit-checker --spp 16384 --sampler sobol --lights nee --seed 1000 -q \
     -o "$work/lc-ref.exr"
 $vrpt converge scenes/lit-checker --reference "$work/lc-ref.exr" --runs 4 -q \
-    --strategies independent+cosine+nee,stratified+cosine+nee,sobol+cosine+nee \
+    --strategies independent+cosine+nee+area+power,stratified+cosine+nee+area+power,sobol+cosine+nee+area+power \
     --spp 4,16,64,256,1024 --plot "$out/lit-checker-converge.png" >/dev/null
+
+# Many lights (README "Many lights: the light tree"): the night hall at 16 spp with lights
+# chosen by power and by the tree (the default), and a 1024-spp image of it.
+for choice in power tree; do
+    $vrpt render scenes/night-hall --spp 16 --seed 1 -q --light-choice "$choice" \
+        -o "$out/night-hall-$choice-16spp.png"
+done
+$vrpt render scenes/night-hall --spp 1024 --seed 1 -q -o "$out/night-hall-1024spp.png"
 
 ls -l "$out"/*.png
