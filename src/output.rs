@@ -294,6 +294,23 @@ impl RenderMetadata {
     }
 
     /// Like [`RenderMetadata::radiance`], but the metadata must be there.
+    ///
+    /// ```
+    /// use vrpt::output::{write_render, RenderMetadata};
+    /// use vrpt::render::{render, NoProgress, RenderSettings};
+    /// let scene = vrpt::scene::load(std::path::Path::new("scenes/cornell-box"))?;
+    /// let settings = RenderSettings { width: 8, height: 8, spp: 4, seed: 7, ..Default::default() };
+    /// let (film, stats) = render(&scene, &settings, &NoProgress)?;
+    /// let path = std::env::temp_dir().join("vrpt-doc-metadata.exr");
+    /// write_render(&path, &film, &RenderMetadata::new(&scene, &settings, &stats), 0.0, None)?;
+    /// // read it back: the pixels, their variance and sample counts, and what made them
+    /// let image = vrpt::image_io::read_exr(&path)?;
+    /// let meta = RenderMetadata::require(&image, &path)?;
+    /// assert_eq!((meta.spp, meta.seed, meta.strategy), (4, Some(7), settings.strategy));
+    /// assert_eq!(image.samples.as_deref().map(|s| s[0]), Some(4));
+    /// # std::fs::remove_file(&path).ok();
+    /// # Ok::<(), vrpt::Error>(())
+    /// ```
     pub fn require(img: &RgbImage, path: &Path) -> Result<Self> {
         Self::radiance(img, path)?.ok_or_else(|| Error::ImageRead {
             path: path.to_path_buf(),

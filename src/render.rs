@@ -1,10 +1,12 @@
 //! The render loop: rayon over 16×16 tiles; per pixel, samples `first_sample ..
-//! first_sample + spp` from a [`Sampler`] through the [`integrator`] into a [`Film`].
+//! first_sample + spp` from a [`Sampler`] through the [`integrator`](crate::integrator) into a [`Film`].
 //!
 //! Each pixel's samples are summed in index order by one thread, and each draw depends only on
 //! (seed, pixel, sample index, dimension), so the image is bit-identical whatever the number of
 //! threads or the order in which tiles finish. Non-finite samples are counted and dropped (the
 //! pixel's count excludes them), never written into the image.
+
+#![warn(missing_docs)]
 
 use crate::accel::TraceStack;
 use crate::camera::Camera;
@@ -31,13 +33,17 @@ pub const SAMPLE_INDICES: u64 = 1 << 32;
 /// What to render, and how.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RenderSettings {
+    /// Image width in pixels.
     pub width: u32,
+    /// Image height in pixels.
     pub height: u32,
     /// Samples per pixel.
     pub spp: u32,
     /// Index of the first sample (a render of samples `k..k+spp` merges with one of `0..k`).
     pub first_sample: u32,
+    /// Max path segments, the camera ray included.
     pub max_depth: u32,
+    /// Seed of every random stream.
     pub seed: u64,
     /// How every random decision is made.
     pub strategy: Strategy,
@@ -81,6 +87,7 @@ impl RenderSettings {
 /// Counts and times of one render.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct RenderStats {
+    /// Wall time.
     pub elapsed: Duration,
     /// Rays traced, by kind.
     pub rays: RayCounts,
@@ -131,6 +138,7 @@ impl RenderStats {
         s
     }
 
+    /// The summary lines `vrpt render` prints: size, spp, strategy, time, rates and rays.
     pub fn summary(&self, scene: &Scene, settings: &RenderSettings) -> String {
         format!(
             "{}: {} triangles, BVH built in {:.1} ms ({:.1} KiB)\n\
@@ -212,85 +220,90 @@ fn camera_for(scene: &Scene, settings: &RenderSettings) -> Result<Camera> {
     })
 }
 
-/// Render `scene` with `settings` into a new film: one pass of all the spp.
+/// Render `scene` with `settings` into a new film: one pass of all the spp, with the sampler
+/// `settings.strategy.sampler` names.
 pub fn render(
     scene: &Scene,
     settings: &RenderSettings,
     progress: &dyn Progress,
 ) -> Result<(Film, RenderStats)> {
-    let camera = camera_for(scene, settings)?;
-    with_threads(settings.threads, || {
-        let mut film = Film::new(settings.width, settings.height);
-        let first = settings.first_sample as u64;
-        let pass = SamplePass {
-            origin: settings.first_sample,
-            size: settings.spp,
-        };
-        let range = first..first + settings.spp as u64;
-        let (stats, _) = render_range(
-            scene,
-            &camera,
-            settings,
-            (pass, range, 0..tile_count(settings), None),
-            &mut film,
-            progress,
-        );
-        (film, stats)
-    })
+    render_passes(scene, settings, &PassPlan::default(), progress).map(|r| (r.film, r.stats))
 }
 
-/// A pass: the stratified set of `size` samples starting at sample `origin`.
+/// A pass: the stratified set of `size` samples starting at sample index `origin`. A sampler
+/// that stratifies over a known count (the stratified sampler's strata) builds its set from it;
+/// one that does not (independent, Sobol) ignores it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-struct SamplePass {
-    origin: u32,
-    size: u32,
+pub struct SamplePass {
+    /// The pass's first sample index.
+    pub origin: u32,
+    /// Its number of samples per pixel.
+    pub size: u32,
+}
+
+/// Makes the sampler of one pass of a render: `(seed, pass) → sampler`. The render loop clones
+/// it per worker thread and calls [`Sampler::start_pixel_sample`] for every sample of the pass,
+/// with sample indices `pass.origin .. pass.origin + pass.size` (a stopped or sharded render
+/// takes a part of them). A closure `Fn(u64, SamplePass) -> S` is a factory:
+///
+/// ```
+/// use vrpt::render::SamplePass;
+/// use vrpt::sampler::IndependentSampler;
+/// let factory = |seed: u64, _pass: SamplePass| IndependentSampler::new(seed);
+/// # fn is_factory<F: vrpt::render::SamplerFactory>(_: &F) {}
+/// # is_factory(&factory);
+/// ```
+pub trait SamplerFactory: Sync {
+    /// The sampler it makes.
+    type Sampler: Sampler;
+    /// The sampler of `pass` of a render with seed `seed`.
+    fn make(&self, seed: u64, pass: SamplePass) -> Self::Sampler;
+}
+
+impl<S: Sampler, F: Fn(u64, SamplePass) -> S + Sync> SamplerFactory for F {
+    type Sampler = S;
+    #[inline]
+    fn make(&self, seed: u64, pass: SamplePass) -> S {
+        self(seed, pass)
+    }
+}
+
+/// The built-in samplers' factories, one per [`SamplerKind`].
+fn independent(seed: u64, _: SamplePass) -> IndependentSampler {
+    IndependentSampler::new(seed)
+}
+fn stratified(seed: u64, pass: SamplePass) -> StratifiedSampler {
+    StratifiedSampler::with_origin(seed, pass.size, pass.origin)
+}
+fn sobol(seed: u64, _: SamplePass) -> SobolSampler {
+    SobolSampler::new(seed)
 }
 
 /// Render the samples `range` (sample indices, all within `pass` and below
 /// [`SAMPLE_INDICES`]) of the tiles `tiles` (row-major tile indices) into `film`, going on from
-/// the sums it holds, on the current rayon pool, with the sampler the strategy names. With
-/// `stop`, a tile reads the flag before each pixel (and every 256 samples of one) and ends there
-/// when it is set: the second value says whether some pixel was left out (the film then holds a
-/// partial batch, for the caller to drop).
-fn render_range(
+/// the sums it holds, on the current rayon pool, with the sampler `factory` makes for the pass.
+/// With `stop`, a tile reads the flag before each pixel (and every 256 samples of one) and ends
+/// there when it is set: the second value says whether some pixel was left out (the film then
+/// holds a partial batch, for the caller to drop).
+fn render_range<F: SamplerFactory>(
     scene: &Scene,
     camera: &Camera,
     settings: &RenderSettings,
+    factory: &F,
     (pass, range, tiles, stop): (SamplePass, Range<u64>, Range<u32>, Option<&AtomicBool>),
     film: &mut Film,
     progress: &dyn Progress,
 ) -> (RenderStats, bool) {
-    let seed = settings.seed;
-    let range = (range, tiles, stop);
-    match settings.strategy.sampler {
-        SamplerKind::Independent => render_with(
-            scene,
-            camera,
-            settings,
-            IndependentSampler::new(seed),
-            range,
-            film,
-            progress,
-        ),
-        SamplerKind::Stratified => render_with(
-            scene,
-            camera,
-            settings,
-            StratifiedSampler::with_origin(seed, pass.size, pass.origin),
-            range,
-            film,
-            progress,
-        ),
-        SamplerKind::Sobol => render_with(
-            scene,
-            camera,
-            settings,
-            SobolSampler::new(seed),
-            range,
-            film,
-            progress,
-        ),
-    }
+    let sampler = factory.make(settings.seed, pass);
+    render_with(
+        scene,
+        camera,
+        settings,
+        sampler,
+        (range, tiles, stop),
+        film,
+        progress,
+    )
 }
 
 /// How a render is split into passes, which part of it is rendered, and when it stops.
@@ -333,10 +346,13 @@ pub fn shard_range(spp: u32, (i, n): (u32, u32)) -> Result<Range<u32>> {
 
 /// What [`render_passes`] made.
 pub struct Rendered {
+    /// The image's sums.
     pub film: Film,
+    /// What it cost.
     pub stats: RenderStats,
     /// The samples rendered: `first_sample .. first_sample + spp` (the same for every pixel).
     pub first_sample: u32,
+    /// Samples per pixel rendered.
     pub spp: u32,
     /// Whether the stop flag ended the render before all its samples.
     pub interrupted: bool,
@@ -363,10 +379,43 @@ pub fn pass_bounds(done: u64, pass: u64, spp: u64) -> Range<u64> {
 /// samples and a stop waits about a quarter of a second. A partial pass is an unbiased estimate
 /// (every sample of a stratified or Sobol set is uniform on its own), and the image does not
 /// depend on how a pass was cut: a pixel's sums go on in sample order.
+///
+/// The sampler is the one `settings.strategy.sampler` names; [`render_passes_with`] takes any.
 pub fn render_passes(
     scene: &Scene,
     settings: &RenderSettings,
     plan: &PassPlan,
+    progress: &dyn Progress,
+) -> Result<Rendered> {
+    match settings.strategy.sampler {
+        SamplerKind::Independent => {
+            render_passes_with(scene, settings, plan, &independent, progress)
+        }
+        SamplerKind::Stratified => render_passes_with(scene, settings, plan, &stratified, progress),
+        SamplerKind::Sobol => render_passes_with(scene, settings, plan, &sobol, progress),
+    }
+}
+
+/// [`render_passes`] with the samplers `factory` makes, whatever `settings.strategy.sampler`
+/// says: the entry point for a sampler written outside vrpt. It keeps every guarantee of the
+/// built-in samplers (passes, shards, `first_sample`, time limits, the stop flag, films that
+/// merge, images independent of the thread count), which go through it too.
+///
+/// ```
+/// use vrpt::render::{render_passes_with, NoProgress, PassPlan, RenderSettings, SamplePass};
+/// use vrpt::sampler::StratifiedSampler;
+/// let scene = vrpt::scene::load(std::path::Path::new("scenes/cornell-box"))?;
+/// let settings = RenderSettings { width: 8, height: 8, spp: 4, ..Default::default() };
+/// let factory = |seed, pass: SamplePass| StratifiedSampler::with_origin(seed, pass.size, pass.origin);
+/// let r = render_passes_with(&scene, &settings, &PassPlan::default(), &factory, &NoProgress)?;
+/// assert_eq!((r.spp, r.film.width), (4, 8));
+/// # Ok::<(), vrpt::Error>(())
+/// ```
+pub fn render_passes_with<F: SamplerFactory>(
+    scene: &Scene,
+    settings: &RenderSettings,
+    plan: &PassPlan,
+    factory: &F,
     progress: &dyn Progress,
 ) -> Result<Rendered> {
     let camera = camera_for(scene, settings)?;
@@ -413,6 +462,7 @@ pub fn render_passes(
                     scene,
                     &camera,
                     settings,
+                    factory,
                     (set, r, all.clone(), stop),
                     film,
                     progress,

@@ -15,6 +15,8 @@
 //! (`stratified+phong+mis`), a name that gives them has five parts
 //! (`stratified+phong+mis+area+power`), and the presets use the defaults.
 
+#![warn(missing_docs)]
+
 use crate::bsdf::Directions;
 use crate::lights::{LightChoice, LightPoints, LightStrategy};
 use crate::names::{parse_value, value_name, value_names};

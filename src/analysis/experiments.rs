@@ -13,6 +13,10 @@
 //! - [`converge`]: for each strategy and each spp, K renders from scratch (a prefix of a longer
 //!   stratified run is not stratified), the mean MSE and relMSE, and the least-squares slope of
 //!   `log MSE` against `log spp` (−1 for independent samples, steeper with stratification).
+//!
+//! Both take built-in strategies, and [`compare_entries`] and [`converge_entries`] take
+//! [`Entry`]s too: a name and a strategy with a sampler of the caller's own
+//! ([`Entry::custom`]), in the same table, CSV, JSON, plot and report as the built-in ones.
 
 use crate::analysis::fit::log_log_slope;
 use crate::analysis::metrics::{
@@ -21,24 +25,81 @@ use crate::analysis::metrics::{
 use crate::error::{Error, Result};
 use crate::image_io::RgbImage;
 use crate::output::RenderMetadata;
-use crate::render::{render_passes, with_threads, NoProgress, PassPlan, Progress, RenderSettings};
+use crate::render::{
+    render_passes, render_passes_with, with_threads, NoProgress, PassPlan, Progress,
+    RenderSettings, Rendered, SamplerFactory,
+};
 use crate::scene::Scene;
 use crate::strategy::Strategy;
 use glam::Vec3;
 use std::path::Path;
 use std::time::Duration;
 
+/// The renderer of one [`Entry`]: `(scene, settings, plan) → rendered`.
+type EntryRender<'a> = dyn Fn(&Scene, &RenderSettings, &PassPlan) -> Result<Rendered> + Sync + 'a;
+
+/// One line of an experiment: a name, the strategy it renders with (directions, lights, light
+/// points and choice; and the sampler, for a built-in entry), and the renderer.
+pub struct Entry<'a> {
+    /// The name in tables, files and reports.
+    pub name: String,
+    /// The strategy of every run (for a custom entry, its `sampler` is not used).
+    pub strategy: Strategy,
+    render: Box<EntryRender<'a>>,
+}
+
+impl Entry<'static> {
+    /// A built-in strategy, named as it prints.
+    pub fn builtin(strategy: Strategy) -> Entry<'static> {
+        Entry {
+            name: strategy.to_string(),
+            strategy,
+            render: Box::new(|scene, settings, plan| {
+                render_passes(scene, settings, plan, &NoProgress)
+            }),
+        }
+    }
+}
+
+impl<'a> Entry<'a> {
+    /// A sampler of the caller's own (see [`SamplerFactory`]) with the direction and light
+    /// parts of `strategy`, under `name`.
+    pub fn custom<F: SamplerFactory + 'a>(name: &str, factory: F, strategy: Strategy) -> Entry<'a> {
+        Entry {
+            name: name.to_string(),
+            strategy,
+            render: Box::new(move |scene, settings, plan| {
+                render_passes_with(scene, settings, plan, &factory, &NoProgress)
+            }),
+        }
+    }
+}
+
+impl std::fmt::Debug for Entry<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Entry")
+            .field("name", &self.name)
+            .field("strategy", &self.strategy)
+            .finish_non_exhaustive()
+    }
+}
+
 /// What every experiment needs besides the strategies.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ExperimentSettings {
+    /// Image width in pixels (the reference's).
     pub width: u32,
+    /// Image height in pixels.
     pub height: u32,
+    /// Max path depth of every run (the reference's).
     pub max_depth: u32,
     /// The first seed of the runs (see [`ExperimentSettings::run_seeds`]).
     pub seed: u64,
     /// The seeds whose samples the reference holds (from its metadata): no run uses them.
     pub reference_seeds: Vec<u64>,
+    /// Independent runs per strategy (and per spp, in a sweep).
     pub runs: u32,
+    /// Worker threads; `None`: all cores.
     pub threads: Option<usize>,
     /// Parts of the image whose metrics `compare` also reports on their own.
     pub regions: Vec<Region>,
@@ -151,7 +212,9 @@ pub fn check_reference(scene: &Scene, reference: &RgbImage, s: &ExperimentSettin
 /// One strategy's row of a comparison.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct CompareRow {
+    /// The entry's name.
     pub strategy: String,
+    /// Runs averaged.
     pub runs: u32,
     /// Mean spp per run (equal-time runs reach different spp).
     pub spp: f64,
@@ -159,13 +222,17 @@ pub struct CompareRow {
     pub seconds: f64,
     /// Mean over runs of each run's error metrics.
     pub mse: f64,
+    /// Mean relMSE, `mean((x − r)²/(r² + 0.01))`.
     pub rel_mse: f64,
+    /// Mean RMSE.
     pub rmse: f64,
+    /// Mean absolute error.
     pub mae: f64,
     /// Per-pixel variance of one run, across runs (averaged over pixels and channels).
     pub variance: f64,
     /// Bias test of the runs against the reference: Student's t and its two-sided p.
     pub bias_t: f64,
+    /// Two-sided p of `bias_t`.
     pub bias_p: f64,
     /// `MSE_baseline / MSE`.
     pub mse_reduction: f64,
@@ -176,11 +243,17 @@ pub struct CompareRow {
 /// One strategy's metrics over one region (means over runs).
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct RegionRow {
+    /// The entry's name.
     pub strategy: String,
+    /// The region's name.
     pub region: String,
+    /// Mean MSE over the region.
     pub mse: f64,
+    /// Mean relMSE over the region.
     pub rel_mse: f64,
+    /// Mean RMSE over the region.
     pub rmse: f64,
+    /// Mean absolute error over the region.
     pub mae: f64,
     /// `MSE_baseline / MSE` in this region.
     pub mse_reduction: f64,
@@ -189,11 +262,14 @@ pub struct RegionRow {
 /// A comparison: one row per strategy and each strategy's first run's image.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct Comparison {
+    /// One row per entry, in the order given.
     pub rows: Vec<CompareRow>,
     /// Per strategy (in the order of `rows`) and region (in the settings' order).
     pub regions: Vec<RegionRow>,
+    /// The name of the baseline row (independent, or the first).
     pub baseline: String,
     #[serde(skip)]
+    /// Each entry's first run's image (row-major).
     pub images: Vec<Vec<Vec3>>,
     /// The per-pixel variance of the mean of each strategy's first run (for the report).
     #[serde(skip)]
@@ -207,10 +283,45 @@ fn mean_of<T>(v: &[T], f: impl Fn(&T) -> f64) -> f64 {
 }
 
 /// Compare `strategies` at `spp` per run (or `equal_time` per run, in passes of `spp`).
+///
+/// ```
+/// use vrpt::analysis::experiments::{compare, ExperimentSettings};
+/// use vrpt::image_io::RgbImage;
+/// use vrpt::render::{render, NoProgress, RenderSettings};
+/// use vrpt::strategy::Strategy;
+/// let scene = vrpt::scene::load(std::path::Path::new("scenes/cornell-box"))?;
+/// // a reference (in earnest: thousands of spp, `vrpt render`, read with `read_exr`)
+/// let r = RenderSettings { width: 8, height: 8, spp: 256, seed: 1000, ..Default::default() };
+/// let (film, _) = render(&scene, &r, &NoProgress)?;
+/// let reference = RgbImage { width: 8, height: 8, pixels: film.mean_image(), ..Default::default() };
+/// let s = ExperimentSettings {
+///     width: 8, height: 8, max_depth: 8, seed: 1, reference_seeds: vec![1000],
+///     runs: 2, threads: None, regions: Vec::new(),
+/// };
+/// let strategies = Strategy::parse_list("independent,mis").map_err(vrpt::Error::Settings)?;
+/// let c = compare(&scene, &reference, &strategies, 4, None, &s, &NoProgress)?;
+/// print!("{}", c.table());
+/// assert!(c.rows[1].mse < c.rows[0].mse); // MIS beats uniform directions without light sampling
+/// # Ok::<(), vrpt::Error>(())
+/// ```
 pub fn compare(
     scene: &Scene,
     reference: &RgbImage,
     strategies: &[Strategy],
+    spp: u32,
+    equal_time: Option<Duration>,
+    s: &ExperimentSettings,
+    progress: &dyn Progress,
+) -> Result<Comparison> {
+    let entries: Vec<Entry> = strategies.iter().map(|&st| Entry::builtin(st)).collect();
+    compare_entries(scene, reference, &entries, spp, equal_time, s, progress)
+}
+
+/// [`compare`] over entries, built-in or custom.
+pub fn compare_entries(
+    scene: &Scene,
+    reference: &RgbImage,
+    strategies: &[Entry],
     spp: u32,
     equal_time: Option<Duration>,
     s: &ExperimentSettings,
@@ -239,13 +350,13 @@ pub fn compare(
                 } else {
                     spp
                 };
-                let settings = run_settings(st, s, max_spp, seed);
+                let settings = run_settings(&st.strategy, s, max_spp, seed);
                 let plan = PassPlan {
                     pass_spp: Some(spp),
                     time_limit: equal_time,
                     ..PassPlan::default()
                 };
-                let r = render_passes(scene, &settings, &plan, &NoProgress)?;
+                let r = (st.render)(scene, &settings, &plan)?;
                 let (film, stats, reached) = (r.film, r.stats, r.spp);
                 let img = film.mean_image();
                 if k == 0 {
@@ -258,12 +369,12 @@ pub fn compare(
                 secs.push(stats.elapsed.as_secs_f64());
                 spps.push(reached as f64);
                 runs.push(img);
-                progress.finished(&format!("{st} run {}/{}", k + 1, s.runs));
+                progress.finished(&format!("{} run {}/{}", st.name, k + 1, s.runs));
                 progress.advance(1);
             }
             for (r, m) in s.regions.iter().zip(&region_ms) {
                 region_rows.push(RegionRow {
-                    strategy: st.to_string(),
+                    strategy: st.name.clone(),
                     region: r.name.clone(),
                     mse: mean_of(m, |m| m.mse),
                     rel_mse: mean_of(m, |m| m.rel_mse),
@@ -274,7 +385,7 @@ pub fn compare(
             }
             let bias = bias_test(&runs, &reference.pixels);
             rows.push(CompareRow {
-                strategy: st.to_string(),
+                strategy: st.name.clone(),
                 runs: s.runs,
                 spp: mean_of(&spps, |x| *x),
                 seconds: mean_of(&secs, |x| *x),
@@ -347,9 +458,13 @@ fn warm_up(scene: &Scene, s: &ExperimentSettings) -> Result<()> {
 /// One point of a convergence sweep.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct ConvergePoint {
+    /// The entry's name.
     pub strategy: String,
+    /// Samples per pixel of each run.
     pub spp: u32,
+    /// Mean MSE of a run.
     pub mse: f64,
+    /// Mean relMSE of a run.
     pub rel_mse: f64,
     /// Mean wall time per run.
     pub seconds: f64,
@@ -359,7 +474,9 @@ pub struct ConvergePoint {
 /// and relMSE against spp.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct Convergence {
+    /// Every (entry, spp) point.
     pub points: Vec<ConvergePoint>,
+    /// One fit per entry.
     pub slopes: Vec<ConvergeSlope>,
     /// Per point (in the order of `points`), the first run's image and the per-pixel variance
     /// of its mean (for the report).
@@ -370,8 +487,11 @@ pub struct Convergence {
 /// The fitted convergence rates of one strategy.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct ConvergeSlope {
+    /// The entry's name.
     pub strategy: String,
+    /// Least-squares slope of log MSE against log spp.
     pub mse_slope: f64,
+    /// Least-squares slope of log relMSE against log spp.
     pub rel_mse_slope: f64,
 }
 
@@ -380,6 +500,19 @@ pub fn converge(
     scene: &Scene,
     reference: &RgbImage,
     strategies: &[Strategy],
+    spps: &[u32],
+    s: &ExperimentSettings,
+    progress: &dyn Progress,
+) -> Result<Convergence> {
+    let entries: Vec<Entry> = strategies.iter().map(|&st| Entry::builtin(st)).collect();
+    converge_entries(scene, reference, &entries, spps, s, progress)
+}
+
+/// [`converge`] over entries, built-in or custom.
+pub fn converge_entries(
+    scene: &Scene,
+    reference: &RgbImage,
+    strategies: &[Entry],
     spps: &[u32],
     s: &ExperimentSettings,
     progress: &dyn Progress,
@@ -401,8 +534,8 @@ pub fn converge(
             for &spp in spps {
                 let (mut mse, mut rel, mut secs) = (0.0, 0.0, 0.0);
                 for (k, seed) in s.run_seeds().into_iter().enumerate() {
-                    let settings = run_settings(st, s, spp, seed);
-                    let r = render_passes(scene, &settings, &PassPlan::default(), &NoProgress)?;
+                    let settings = run_settings(&st.strategy, s, spp, seed);
+                    let r = (st.render)(scene, &settings, &PassPlan::default())?;
                     let (film, stats) = (r.film, r.stats);
                     let img = film.mean_image();
                     let m = metrics(&img, &reference.pixels);
@@ -412,12 +545,12 @@ pub fn converge(
                     mse += m.mse;
                     rel += m.rel_mse;
                     secs += stats.elapsed.as_secs_f64();
-                    progress.finished(&format!("{st} spp {spp} run {}/{}", k + 1, s.runs));
+                    progress.finished(&format!("{} spp {spp} run {}/{}", st.name, k + 1, s.runs));
                     progress.advance(spp as u64);
                 }
                 let k = s.runs as f64;
                 points.push(ConvergePoint {
-                    strategy: st.to_string(),
+                    strategy: st.name.clone(),
                     spp,
                     mse: mse / k,
                     rel_mse: rel / k,
@@ -428,7 +561,7 @@ pub fn converge(
                 rs.push(rel / k);
             }
             slopes.push(ConvergeSlope {
-                strategy: st.to_string(),
+                strategy: st.name.clone(),
                 mse_slope: log_log_slope(&xs, &ys),
                 rel_mse_slope: log_log_slope(&xs, &rs),
             });

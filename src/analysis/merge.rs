@@ -15,8 +15,11 @@ use std::path::PathBuf;
 
 /// One input of a merge: the image, its file (for messages) and its metadata.
 pub struct MergeInput {
+    /// Where the input was read from.
     pub path: PathBuf,
+    /// Its pixels, variance and counts.
     pub image: RgbImage,
+    /// Its metadata.
     pub meta: RenderMetadata,
 }
 

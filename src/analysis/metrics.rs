@@ -21,10 +21,15 @@ pub const REL_EPSILON: f64 = 0.01;
 /// Error metrics of one image against a reference.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 pub struct Metrics {
+    /// Mean squared error over pixels and channels.
     pub mse: f64,
+    /// Relative MSE, `mean((x − r)²/(r² + 0.01))`.
     pub rel_mse: f64,
+    /// Root of the MSE.
     pub rmse: f64,
+    /// Mean absolute error.
     pub mae: f64,
+    /// Mean of `x − r` (the sign of a bias).
     pub mean_signed_error: f64,
 }
 
@@ -61,10 +66,15 @@ pub fn metrics(image: &[Vec3], reference: &[Vec3]) -> Metrics {
 /// metrics are reported on their own: a scene's parts compared separately.
 #[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
 pub struct Region {
+    /// Its name in tables.
     pub name: String,
+    /// Left column.
     pub x: u32,
+    /// Top row (rows from the top).
     pub y: u32,
+    /// Width in pixels.
     pub w: u32,
+    /// Height in pixels.
     pub h: u32,
 }
 

@@ -9,6 +9,8 @@
 //! - [`plots`]: log-log convergence plots (SVG/PNG) and labelled image grids (PNG);
 //! - [`report`]: the self-contained HTML report of compare, converge and diff.
 
+#![warn(missing_docs)]
+
 pub mod experiments;
 pub mod fit;
 pub mod merge;

@@ -40,10 +40,13 @@ const DATA_TAG: &str = r#"<script type="application/json" id="vrpt-data">{}</scr
 /// One image of the report.
 #[derive(Clone, Debug)]
 pub struct ReportImage {
+    /// Its label in the viewer.
     pub name: String,
     /// For `converge`: the spp the image belongs to ("16 spp"); empty otherwise.
     pub group: String,
+    /// Whether it is the reference.
     pub reference: bool,
+    /// Linear RGB, row-major.
     pub rgb: Vec<Vec3>,
     /// Per-pixel variance of the mean (the page shows its square root, the standard error).
     pub variance: Option<Vec<Vec3>>,
@@ -52,8 +55,11 @@ pub struct ReportImage {
 /// A column of a metrics table.
 #[derive(Clone, Debug, Serialize)]
 pub struct Column {
+    /// The row field it shows.
     pub key: String,
+    /// Its header.
     pub label: String,
+    /// Whether it is a number (formatted and sortable as one).
     pub numeric: bool,
 }
 
@@ -80,8 +86,11 @@ impl Column {
 /// A metrics table: rows are JSON objects keyed by the columns' keys.
 #[derive(Clone, Debug, Serialize)]
 pub struct Table {
+    /// Its heading.
     pub title: String,
+    /// Its columns, in order.
     pub columns: Vec<Column>,
+    /// Its rows, as JSON objects keyed by the columns' keys.
     pub rows: Vec<serde_json::Map<String, serde_json::Value>>,
     /// The column whose value names a row (unique within the table).
     pub row_key: String,
@@ -167,12 +176,19 @@ impl Summary {
 pub struct Report {
     /// "compare", "converge" or "diff".
     pub kind: String,
+    /// The page's title.
     pub title: String,
+    /// The settings it was made with, as (name, value).
     pub settings: Vec<(String, String)>,
+    /// Image width in pixels.
     pub width: u32,
+    /// Image height in pixels.
     pub height: u32,
+    /// The images of the viewer.
     pub images: Vec<ReportImage>,
+    /// The metric tables.
     pub tables: Vec<Table>,
+    /// A convergence plot, as SVG.
     pub plot_svg: Option<String>,
     /// What the page opens on, for a comparison.
     pub summary: Option<Summary>,

@@ -19,7 +19,9 @@ use glam::Vec2;
 /// One dimension of the layout: its size and what it decides.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Dim {
+    /// A 1D dimension and what it decides.
     One(&'static str),
+    /// A 2D dimension and what it decides.
     Two(&'static str),
 }
 

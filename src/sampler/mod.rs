@@ -6,6 +6,8 @@
 //! Hot loops are generic over [`Sampler`]; the kind is chosen once, with a `match` on
 //! [`SamplerKind`].
 
+#![warn(missing_docs)]
+
 mod independent;
 pub mod layout;
 mod sobol;
