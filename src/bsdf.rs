@@ -23,6 +23,8 @@
 //!   the estimator `f cosθ / p · 1[wi above]` still has expectation `∫_{H+} f cosθ dω`, because
 //!   `p` is the true density of the directions that are above — the lost mass only ever
 //!   contributed zero. So it stays unbiased.
+//! - `guided`: the BSDF's part of path guiding is `phong`; the integrator mixes it with the
+//!   learned guide ([`crate::guiding`]), so here `guided` samples and evaluates as `phong`.
 
 use crate::math::{average, reflect_local, Frame};
 use crate::sampling::{
@@ -42,6 +44,9 @@ pub enum Directions {
     /// Diffuse or Phong lobe by their albedos, weighted by the mixture pdf.
     #[default]
     Phong,
+    /// Path guiding: the Phong lobes or, with probability 1/2 where it has learned something,
+    /// the incident radiance learned by an SD-tree while rendering (see `vrpt::guiding`).
+    Guided,
 }
 
 impl std::fmt::Display for Directions {
@@ -95,7 +100,9 @@ impl Bsdf {
     /// with both a diffuse and a specular part.
     #[inline]
     pub fn chooses_lobe(&self, directions: Directions) -> bool {
-        directions == Directions::Phong && self.p_diffuse > 0.0 && self.p_diffuse < 1.0
+        matches!(directions, Directions::Phong | Directions::Guided)
+            && self.p_diffuse > 0.0
+            && self.p_diffuse < 1.0
     }
 
     #[inline]
@@ -134,7 +141,7 @@ impl Bsdf {
         match directions {
             Directions::Uniform => uniform_hemisphere_pdf(),
             Directions::Cosine => cosine_hemisphere_pdf(wi.z),
-            Directions::Phong => self.mixture_pdf(wo, wi),
+            Directions::Phong | Directions::Guided => self.mixture_pdf(wo, wi),
         }
     }
 
@@ -165,7 +172,7 @@ impl Bsdf {
         let wi = match directions {
             Directions::Uniform => sample_uniform_hemisphere(u),
             Directions::Cosine => sample_cosine_hemisphere(u),
-            Directions::Phong => {
+            Directions::Phong | Directions::Guided => {
                 if u_lobe < self.p_diffuse {
                     sample_cosine_hemisphere(u)
                 } else {

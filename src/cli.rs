@@ -12,7 +12,7 @@ use vrpt::commands::experiment::{CompareRequest, ConvergeRequest, Experiment, Ex
 use vrpt::commands::{diff, merge, render, Written};
 use vrpt::error::{Error, Result};
 use vrpt::lights::{LightChoice, LightPoints, LightStrategy};
-use vrpt::output::parse_shard;
+use vrpt::output::{parse_seconds, parse_shard};
 use vrpt::render::Progress;
 use vrpt::sampler::SamplerKind;
 use vrpt::strategy::{Preset, Strategy};
@@ -38,6 +38,13 @@ pub enum Command {
     Compare(CompareArgs),
     /// Render a scene with several strategies at several spp and fit how fast the error falls.
     Converge(ConvergeArgs),
+    /// Show what path guiding learned at a pixel's first hit, beside the incident radiance there.
+    Guide {
+        #[command(flatten)]
+        request: vrpt::commands::guide::GuideRequest,
+        #[command(flatten)]
+        strategy: StrategyArgs,
+    },
 }
 
 /// How points, directions and lights are sampled: a preset, or the axes separately.
@@ -100,7 +107,7 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = 0)]
     pub first_sample: u32,
     /// Stop at the first whole pass that ends after this many seconds (--spp is then a cap).
-    #[arg(long, value_name = "SECONDS", value_parser = positive_seconds, allow_negative_numbers = true)]
+    #[arg(long, value_name = "SECONDS", value_parser = parse_seconds, allow_negative_numbers = true)]
     pub time_limit: Option<f64>,
     /// Samples per pixel per pass, the unit of stratification (default: all, or 16 with
     /// --time-limit).
@@ -128,13 +135,6 @@ pub struct RenderArgs {
     /// in 16 is timed, about 1% slower).
     #[arg(long, conflicts_with = "quiet")]
     pub stats: bool,
-}
-
-fn positive_seconds(s: &str) -> std::result::Result<f64, String> {
-    match s.parse::<f64>() {
-        Ok(x) if x > 0.0 && x.is_finite() => Ok(x),
-        _ => Err(format!("'{s}' is not a positive number of seconds")),
-    }
 }
 
 /// A comma-separated list as one flag value (a newtype, so clap takes it as one value).
@@ -231,7 +231,7 @@ pub struct CompareArgs {
     #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..))]
     pub spp: u32,
     /// Give each run this many seconds instead of a fixed spp (whole passes of --spp).
-    #[arg(long, value_name = "SECONDS", value_parser = positive_seconds, allow_negative_numbers = true)]
+    #[arg(long, value_name = "SECONDS", value_parser = parse_seconds, allow_negative_numbers = true)]
     pub equal_time: Option<f64>,
     /// Write a PNG grid: per strategy its first run's image and error map.
     #[arg(long, value_name = "PNG")]
@@ -267,7 +267,15 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
         Command::Diff(args) => ok(run_diff(args)),
         Command::Compare(args) => ok(run_compare(args)),
         Command::Converge(args) => ok(run_converge(args)),
+        Command::Guide { request, strategy } => ok(run_guide(request, strategy)),
     }
+}
+
+fn run_guide(mut request: vrpt::commands::guide::GuideRequest, s: StrategyArgs) -> Result<()> {
+    let directions = s.directions.or(Some(Directions::Guided));
+    request.strategy = StrategyArgs { directions, ..s }.resolve()?;
+    out(&vrpt::commands::guide::run(&request)?.summary());
+    Ok(())
 }
 
 /// Print to stdout; a closed pipe (`vrpt diff … | head -1`) ends the output quietly.

@@ -23,12 +23,19 @@
 //! unbiased termination, after the light sample of that vertex (roulette does not enter the
 //! MIS weights: any weights that sum to 1 keep the estimator unbiased).
 //!
+//! With `--directions guided` a bounce samples its direction from the mixture of the Phong
+//! lobes and the learned guide of [`crate::guiding`] (one-sample MIS, pdf
+//! `α·p_guide + (1−α)·p_bsdf`), and that mixture pdf is `p_bsdf` in both MIS weights above. A
+//! training render also records, at each bounce, the radiance that came back along the sampled
+//! direction (see [`crate::guiding`]) into a [`Record`] buffer.
+//!
 //! Every bounce draws the same dimensions in the same order ([`BounceSample`], the layout in
 //! [`crate::sampler::layout`]), used or not, so a dimension index means the same decision in
 //! every sample — which is what stratification needs.
 
 use crate::accel::TraceStack;
 use crate::bsdf::Directions;
+use crate::guiding::{canonical_to_dir, dir_to_canonical, GuideAt, Record, SdTree};
 use crate::lights::{LightChoice, LightPoints, LightStrategy};
 use crate::math::Frame;
 use crate::sampler::layout::BounceSample;
@@ -40,7 +47,7 @@ use glam::Vec3;
 pub const RR_START_BOUNCE: u32 = 3;
 
 /// What the integrator needs to know besides the scene.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct IntegratorSettings {
     /// Largest number of path segments, counting the camera ray (≥ 1).
     pub max_depth: u32,
@@ -52,6 +59,10 @@ pub struct IntegratorSettings {
     /// Time one traversal (closest hit or shadow ray) in every [`TIMED_RAY_EVERY`] into
     /// [`RayCounts::trace_ns`]; off unless asked for (`vrpt render --stats`).
     pub time_traces: bool,
+    /// Factor on the guided mixture pdf the estimator divides by: 1, except in the tests that
+    /// show a wrong pdf is caught.
+    #[doc(hidden)]
+    pub guide_pdf_scale: f32,
 }
 
 /// Rays traced, by kind.
@@ -165,12 +176,62 @@ struct Previous {
 #[inline]
 pub fn radiance<S: Sampler>(
     scene: &Scene,
-    (mut origin, mut dir): (Vec3, Vec3),
+    ray: (Vec3, Vec3),
     sampler: &mut S,
     settings: &IntegratorSettings,
     rays: &mut RayCounts,
     stack: &mut TraceStack,
 ) -> Vec3 {
+    radiance_guided(scene, ray, sampler, settings, rays, stack, None, None)
+}
+
+/// Bounces of a path whose radiance a training render records (the rest are not recorded).
+pub const MAX_RECORDED_BOUNCES: usize = 16;
+
+/// A bounce whose record waits for the rest of the path.
+#[derive(Clone, Copy, Debug, Default)]
+struct Pending {
+    leaf: u32,
+    point: glam::Vec2,
+    /// The throughput after the bounce: `β·f·cosθ/p` (before Russian roulette).
+    beta: Vec3,
+    /// The path's radiance when the bounce's record starts counting.
+    l_start: Vec3,
+    /// What the record adds to the path's radiance gathered after it: the share of an
+    /// emitter hit by the bounce's ray that the MIS weight gave to next-event estimation.
+    extra: Vec3,
+    /// `f·cosθ` of the direction.
+    f_cos: Vec3,
+    /// The direction's (mixture) pdf, and its BSDF and guide pdfs.
+    pdf: f32,
+    p_bsdf: f32,
+    p_guide: f32,
+}
+
+/// [`radiance`] with path guiding: directions of `--directions guided` are sampled from the
+/// mixture of the Phong lobes and `guide` (which must be given for them), and with `records`
+/// every bounce's radiance record is appended to it (a training iteration).
+#[allow(clippy::too_many_arguments)]
+#[inline]
+pub fn radiance_guided<S: Sampler>(
+    scene: &Scene,
+    (mut origin, mut dir): (Vec3, Vec3),
+    sampler: &mut S,
+    settings: &IntegratorSettings,
+    rays: &mut RayCounts,
+    stack: &mut TraceStack,
+    guide: Option<&SdTree>,
+    records: Option<&mut Vec<Record>>,
+) -> Vec3 {
+    let guided = settings.directions == Directions::Guided;
+    let guide = if guided { guide } else { None };
+    // only a training render keeps bounces waiting for their records (no array otherwise)
+    let mut pending = records
+        .is_some()
+        .then(|| [Pending::default(); MAX_RECORDED_BOUNCES]);
+    let mut n_pending = 0usize;
+    // whether the previous bounce's direction awaits its record (pending[n_pending - 1])
+    let mut recorded_last = false;
     let mode = settings.lights;
     let lights = scene
         .lights
@@ -199,6 +260,9 @@ pub fn radiance<S: Sampler>(
                 }
             };
             l += beta * scene.environment() * w;
+            if let (true, Some(p)) = (recorded_last && mode == LightStrategy::Mis, &mut pending) {
+                p[n_pending - 1].extra += beta * scene.environment() * (1.0 - w);
+            }
             break;
         };
         let s = scene.surface(&hit);
@@ -218,6 +282,11 @@ pub fn radiance<S: Sampler>(
                 }
             };
             l += beta * m.emission * w;
+            // the guide learns the emission the bounce's ray found whole: under MIS the
+            // estimator took w of it, the record gets the rest too (see crate::guiding)
+            if let (true, Some(p)) = (recorded_last && mode == LightStrategy::Mis, &mut pending) {
+                p[n_pending - 1].extra += beta * m.emission * (1.0 - w);
+            }
         }
         if segment == settings.max_depth {
             break;
@@ -232,6 +301,7 @@ pub fn radiance<S: Sampler>(
             sample_lights,
             bsdf.chooses_lobe(settings.directions),
             segment >= RR_START_BOUNCE,
+            guided,
         );
         // Two-sided shading: put both normals on the side the ray came from.
         let (ng, mut ns) = if front { (s.ng, s.ns) } else { (-s.ng, -s.ns) };
@@ -241,6 +311,7 @@ pub fn radiance<S: Sampler>(
         let frame = Frame::from_normal(ns);
         let wo_local = frame.to_local(wo);
         let spawn = s.p + ng * scene.ray_epsilon;
+        let g = guide.map(|t| GuideAt::new(t, s.p));
         if sample_lights {
             if let Some(ls) = lights.sample(s.p, ns, u.light, u.light_point) {
                 let wi_local = frame.to_local(ls.wi);
@@ -263,10 +334,11 @@ pub fn radiance<S: Sampler>(
                             })
                         {
                             let w = match mode {
-                                LightStrategy::Mis => mis_weight(
-                                    ls.pdf,
-                                    bsdf.pdf(wo_local, wi_local, settings.directions),
-                                ),
+                                LightStrategy::Mis => {
+                                    let p = bsdf.pdf(wo_local, wi_local, settings.directions);
+                                    let p = g.map_or(p, |g| g.mixture_pdf(ls.wi, p));
+                                    mis_weight(ls.pdf, p)
+                                }
                                 _ => 1.0,
                             };
                             l += beta * f * ls.le * (wi_local.z * w / ls.pdf);
@@ -275,14 +347,69 @@ pub fn radiance<S: Sampler>(
                 }
             }
         }
-        let Some(bs) = bsdf.sample(wo_local, u.lobe, u.direction, settings.directions) else {
-            break;
+        // with a guide: the direction's canonical point, and its BSDF and guide pdfs
+        let (wi, bs, mix) = match g {
+            Some(g) => {
+                // one-sample MIS of the guide and the BSDF, weighted by the mixture pdf
+                let (wi, c, wi_local) = if u.guide < g.alpha {
+                    let c = g.dtree.sample_canonical(u.guided_direction);
+                    let wi = canonical_to_dir(c);
+                    (wi, c, frame.to_local(wi))
+                } else {
+                    let Some(bs) = bsdf.sample(wo_local, u.lobe, u.direction, settings.directions)
+                    else {
+                        break;
+                    };
+                    let wi = frame.to_world(bs.wi);
+                    (wi, dir_to_canonical(wi), bs.wi)
+                };
+                if wi_local.z <= 0.0 {
+                    break; // a guided direction below the surface: a failed sample
+                }
+                let p_bsdf = bsdf.pdf(wo_local, wi_local, settings.directions);
+                let (pdf, p_guide) = g.mixture_pdf_canonical(c, p_bsdf);
+                let pdf = pdf * settings.guide_pdf_scale;
+                if !(pdf > 0.0 && pdf.is_finite()) {
+                    break;
+                }
+                let f = bsdf.eval(wo_local, wi_local);
+                let bs = crate::bsdf::BsdfSample {
+                    wi: wi_local,
+                    f,
+                    pdf,
+                };
+                (wi, bs, Some((c, p_bsdf, p_guide)))
+            }
+            None => {
+                let Some(bs) = bsdf.sample(wo_local, u.lobe, u.direction, settings.directions)
+                else {
+                    break;
+                };
+                (frame.to_world(bs.wi), bs, None)
+            }
         };
-        let wi = frame.to_world(bs.wi);
         if wi.dot(ng) <= 0.0 {
             break; // below the geometric surface: no light passes through
         }
         beta *= bs.f * (bs.wi.z / bs.pdf);
+        recorded_last = false;
+        if let (Some(g), Some((c, p_bsdf, p_guide)), Some(pending)) = (g, mix, &mut pending) {
+            if n_pending < MAX_RECORDED_BOUNCES {
+                pending[n_pending] = Pending {
+                    leaf: g.leaf,
+                    point: c,
+                    beta,
+                    l_start: l,
+                    extra: Vec3::ZERO,
+                    f_cos: bs.f * bs.wi.z,
+                    pdf: bs.pdf,
+                    p_bsdf,
+                    p_guide,
+                };
+                n_pending += 1;
+                recorded_last = true;
+            }
+        }
         let bounce = segment; // vertices so far after the camera
         if bounce >= RR_START_BOUNCE {
             let q = beta.max_element().min(0.95);
@@ -298,6 +425,32 @@ pub fn radiance<S: Sampler>(
         });
         origin = spawn;
         dir = wi;
+    }
+    if let (Some(out), Some(pending)) = (records, &pending) {
+        for v in &pending[..n_pending] {
+            // L_i ≈ ΔL / β per channel (where β carries anything), averaged over the channels
+            let d = l - v.l_start + v.extra;
+            let (mut li, mut product) = (0.0, 0.0);
+            for c in 0..3 {
+                if v.beta[c] > 1e-12 {
+                    let lc = d[c] / v.beta[c];
+                    li += lc;
+                    product += lc * v.f_cos[c];
+                }
+            }
+            let value = li / (3.0 * v.pdf);
+            if value.is_finite() && value >= 0.0 {
+                out.push(Record {
+                    leaf: v.leaf,
+                    point: v.point,
+                    value,
+                    product: product / 3.0,
+                    pdf: v.pdf,
+                    p_bsdf: v.p_bsdf,
+                    p_guide: v.p_guide,
+                });
+            }
+        }
     }
     l
 }

@@ -68,6 +68,7 @@ pub mod camera;
 pub mod commands;
 pub mod error;
 pub mod film;
+pub mod guiding;
 pub mod image_io;
 pub mod integrator;
 pub mod lights;

@@ -55,6 +55,23 @@ pub struct RenderMetadata {
     pub requested_spp: Option<u64>,
     /// Whether a signal (Ctrl-C, SIGTERM) stopped the render: `spp` counts the samples taken.
     pub interrupted: bool,
+    /// What path guiding's training did (guided renders; a merge keeps its first input's).
+    pub guide: Option<GuideRecord>,
+}
+
+/// The training of a guided render, as the metadata records it (keys `guide_*`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GuideRecord {
+    /// Training iterations, and their spp in all (not in the image).
+    pub iterations: u32,
+    pub training_spp: u64,
+    /// Wall seconds of the training and of the final iteration (the image).
+    pub training_seconds: f64,
+    pub final_seconds: f64,
+    /// The tree: spatial leaves, quadtree nodes, bytes.
+    pub leaves: u64,
+    pub quad_nodes: u64,
+    pub bytes: u64,
 }
 
 impl RenderMetadata {
@@ -80,6 +97,15 @@ impl RenderMetadata {
             shard: None,
             requested_spp: None,
             interrupted: false,
+            guide: stats.guide.map(|g| GuideRecord {
+                iterations: g.iterations,
+                training_spp: g.training_spp,
+                training_seconds: g.training.as_secs_f64(),
+                final_seconds: g.final_time.as_secs_f64(),
+                leaves: g.tree.leaves as u64,
+                quad_nodes: g.tree.quad_nodes as u64,
+                bytes: g.tree.bytes as u64,
+            }),
         }
     }
 
@@ -146,6 +172,18 @@ impl RenderMetadata {
         }
         if self.interrupted {
             put("interrupted", "true".into());
+        }
+        if let Some(g) = &self.guide {
+            put("guide_iterations", g.iterations.to_string());
+            put("guide_training_spp", g.training_spp.to_string());
+            put(
+                "guide_training_seconds",
+                format!("{:.6}", g.training_seconds),
+            );
+            put("guide_final_seconds", format!("{:.6}", g.final_seconds));
+            put("guide_leaves", g.leaves.to_string());
+            put("guide_quad_nodes", g.quad_nodes.to_string());
+            put("guide_bytes", g.bytes.to_string());
         }
         m
     }
@@ -253,6 +291,29 @@ impl RenderMetadata {
                     ))
                 }
             },
+            guide: match opt::<u32>(a, "guide_iterations")? {
+                None => None,
+                Some(iterations) => {
+                    let n = |k: &str| -> std::result::Result<u64, String> { num(k, req(a, k)?) };
+                    let secs = |k: &str| -> std::result::Result<f64, String> {
+                        let v: f64 = num(k, req(a, k)?)?;
+                        if v.is_finite() && v >= 0.0 {
+                            Ok(v)
+                        } else {
+                            Err(format!("metadata '{k}' must be a finite time"))
+                        }
+                    };
+                    Some(GuideRecord {
+                        iterations,
+                        training_spp: n("guide_training_spp")?,
+                        training_seconds: secs("guide_training_seconds")?,
+                        final_seconds: secs("guide_final_seconds")?,
+                        leaves: n("guide_leaves")?,
+                        quad_nodes: n("guide_quad_nodes")?,
+                        bytes: n("guide_bytes")?,
+                    })
+                }
+            },
         })
     }
 
@@ -316,6 +377,14 @@ impl RenderMetadata {
             path: path.to_path_buf(),
             message: "no vrpt metadata: not a vrpt render".into(),
         })
+    }
+}
+
+/// A flag's positive, finite number of seconds.
+pub fn parse_seconds(s: &str) -> std::result::Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(x) if x > 0.0 && x.is_finite() => Ok(x),
+        _ => Err(format!("'{s}' is not a positive number of seconds")),
     }
 }
 
@@ -402,6 +471,15 @@ mod tests {
             shard: Some((2, 4)),
             requested_spp: Some(128),
             interrupted: true,
+            guide: Some(GuideRecord {
+                iterations: 5,
+                training_spp: 31,
+                training_seconds: 1.25,
+                final_seconds: 2.5,
+                leaves: 40,
+                quad_nodes: 3000,
+                bytes: 123456,
+            }),
         };
         let a = m.to_attributes();
         assert_eq!(a["strategy"], "importance");

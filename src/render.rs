@@ -9,10 +9,12 @@
 #![warn(missing_docs)]
 
 use crate::accel::TraceStack;
+use crate::bsdf::Directions;
 use crate::camera::Camera;
 use crate::error::{Error, Result};
 use crate::film::Film;
-use crate::integrator::{radiance, IntegratorSettings, RayCounts};
+use crate::guiding::{Record, SdTree, TreeSize};
+use crate::integrator::{radiance_guided, IntegratorSettings, RayCounts};
 use crate::sampler::layout::CameraSample;
 use crate::sampler::{IndependentSampler, Sampler, SamplerKind, SobolSampler, StratifiedSampler};
 use crate::scene::Scene;
@@ -51,6 +53,9 @@ pub struct RenderSettings {
     pub threads: Option<usize>,
     /// Time the traversals for [`RenderStats::timing`] (one ray in 16; off by default).
     pub time_traces: bool,
+    /// Factor on the guided pdf (1): for the tests that show a wrong pdf is caught.
+    #[doc(hidden)]
+    pub guide_pdf_scale: f32,
 }
 
 impl Default for RenderSettings {
@@ -65,6 +70,7 @@ impl Default for RenderSettings {
             strategy: Strategy::default(),
             threads: None,
             time_traces: false,
+            guide_pdf_scale: 1.0,
         }
     }
 }
@@ -97,6 +103,43 @@ pub struct RenderStats {
     pub nonfinite: u64,
     /// Wall time summed over the tiles, i.e. over the worker threads (≈ `elapsed` × threads).
     pub thread_time: Duration,
+    /// What path guiding's training did (guided directions only); `elapsed`, `rays` and
+    /// `thread_time` include the training, `samples` does not.
+    pub guide: Option<GuideStats>,
+}
+
+/// What the training of a guided render did.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct GuideStats {
+    /// Training iterations rendered (of 1, 2, 4, … spp).
+    pub iterations: u32,
+    /// Their samples per pixel in all.
+    pub training_spp: u64,
+    /// Wall time of the training (rendering and learning).
+    pub training: Duration,
+    /// Wall time of the final iteration (the image).
+    pub final_time: Duration,
+    /// The learned tree's size.
+    pub tree: TreeSize,
+}
+
+impl GuideStats {
+    /// One line: the time split and the tree's size.
+    pub fn summary(&self) -> String {
+        format!(
+            "guiding: training {} spp in {} iterations, {:.3} s; final iteration {:.3} s \
+             ({:.0}% of the time training); tree {} spatial leaves, {} quadtree nodes, {:.2} MiB\n",
+            self.training_spp,
+            self.iterations,
+            self.training.as_secs_f64(),
+            self.final_time.as_secs_f64(),
+            100.0 * self.training.as_secs_f64()
+                / (self.training + self.final_time).as_secs_f64().max(1e-9),
+            self.tree.leaves,
+            self.tree.quad_nodes,
+            self.tree.bytes as f64 / (1024.0 * 1024.0)
+        )
+    }
 }
 
 impl RenderStats {
@@ -135,6 +178,9 @@ impl RenderStats {
             );
         }
         s.push('\n');
+        if let Some(g) = &self.guide {
+            s += &g.summary();
+        }
         s
     }
 
@@ -285,15 +331,17 @@ fn sobol(seed: u64, _: SamplePass) -> SobolSampler {
 /// With `stop`, a tile reads the flag before each pixel (and every 256 samples of one) and ends
 /// there when it is set: the second value says whether some pixel was left out (the film then
 /// holds a partial batch, for the caller to drop).
+#[allow(clippy::too_many_arguments)]
 fn render_range<F: SamplerFactory>(
     scene: &Scene,
     camera: &Camera,
     settings: &RenderSettings,
     factory: &F,
     (pass, range, tiles, stop): (SamplePass, Range<u64>, Range<u32>, Option<&AtomicBool>),
+    guide: Guide,
     film: &mut Film,
     progress: &dyn Progress,
-) -> (RenderStats, bool) {
+) -> (RenderStats, bool, Vec<Record>) {
     let sampler = factory.make(settings.seed, pass);
     render_with(
         scene,
@@ -301,9 +349,17 @@ fn render_range<F: SamplerFactory>(
         settings,
         sampler,
         (range, tiles, stop),
+        guide,
         film,
         progress,
     )
+}
+
+/// The guide a render samples with, and whether it records for the next one.
+#[derive(Clone, Copy)]
+struct Guide<'a> {
+    tree: Option<&'a SdTree>,
+    record: bool,
 }
 
 /// How a render is split into passes, which part of it is rendered, and when it stops.
@@ -436,6 +492,9 @@ pub fn render_passes_with<F: SamplerFactory>(
     with_threads(settings.threads, || {
         let mut film = Film::new(settings.width, settings.height);
         let mut stats = RenderStats::default();
+        let tree = (settings.strategy.directions == Directions::Guided)
+            .then(|| train_guide((scene, &camera, settings, plan), factory, start, &mut stats));
+        let training = start.elapsed();
         let mut done = range.start;
         let mut interrupted = false;
         while done < range.end {
@@ -458,12 +517,16 @@ pub fn render_passes_with<F: SamplerFactory>(
             // pixels completed, if any; whether it cut a tile short)
             let mut batch = |n: u64, done: u64, stop: Option<&AtomicBool>, film: &mut Film| {
                 let r = first + done..first + done + n;
-                let (s, cut) = render_range(
+                let (s, cut, _) = render_range(
                     scene,
                     &camera,
                     settings,
                     factory,
                     (set, r, all.clone(), stop),
+                    Guide {
+                        tree: tree.as_ref(),
+                        record: false,
+                    },
                     film,
                     progress,
                 );
@@ -499,6 +562,10 @@ pub fn render_passes_with<F: SamplerFactory>(
             }
         }
         stats.elapsed = start.elapsed();
+        if let (Some(t), Some(g)) = (&tree, &mut stats.guide) {
+            g.final_time = stats.elapsed - training;
+            g.tree = t.size();
+        }
         Ok(Rendered {
             film,
             stats,
@@ -507,6 +574,120 @@ pub fn render_passes_with<F: SamplerFactory>(
             interrupted,
         })
     })?
+}
+
+/// The training iterations of a guided render (see [`crate::guiding`]): iterations of 1, 2,
+/// 4, … spp, each sampling with the tree the previous ones taught and recording into the next,
+/// while their sum stays within half the render's spp (at least one iteration), and with a time
+/// limit while the next iteration (estimated at twice the last) would end within a third of it.
+/// Iteration `k` uses seed `mix64(seed ⊕ (k + 1)·φ)`, whatever the render's first sample or
+/// shard: every shard of a render learns the same tree. A set stop flag ends the training.
+/// Training's rays and thread time are added to `stats`, and its [`GuideStats`] set there.
+fn train_guide<F: SamplerFactory>(
+    (scene, camera, settings, plan): (&Scene, &Camera, &RenderSettings, &PassPlan),
+    factory: &F,
+    start: Instant,
+    stats: &mut RenderStats,
+) -> SdTree {
+    let (lo, hi) = scene_bounds(scene);
+    let mut tree = SdTree::new(lo, hi);
+    let budget = (settings.spp as u64 / 2).max(1);
+    let tiles = tile_count(settings);
+    let mut g = GuideStats::default();
+    let mut last = Duration::ZERO;
+    for k in 0u32..32 {
+        let spp = 1u64 << k;
+        if k > 0 {
+            let over_time = plan
+                .time_limit
+                .is_some_and(|t| start.elapsed() + 2 * last > t / 3);
+            let stopped = plan.stop.is_some_and(|f| f.load(Ordering::Relaxed));
+            if g.training_spp + spp > budget || over_time || stopped {
+                break;
+            }
+        }
+        let began = Instant::now();
+        let iteration = RenderSettings {
+            seed: crate::math::mix64(
+                settings.seed ^ (k as u64 + 1).wrapping_mul(0x9e37_79b9_7f4a_7c15),
+            ),
+            ..settings.clone()
+        };
+        let set = SamplePass {
+            origin: 0,
+            size: spp as u32,
+        };
+        // chunks of about 2^20 samples: their records (~16 bytes per bounce) stay within
+        // some tens of MiB
+        let chunk = ((1u64 << 20) / (spp * (TILE * TILE) as u64)).max(1) as u32;
+        let mut film = Film::new(settings.width, settings.height);
+        let mut first = 0;
+        while first < tiles {
+            let end = (first + chunk).min(tiles);
+            let (s, _, records) = render_range(
+                scene,
+                camera,
+                &iteration,
+                factory,
+                (set, 0..spp, first..end, None),
+                Guide {
+                    tree: Some(&tree),
+                    record: true,
+                },
+                &mut film,
+                &NoProgress,
+            );
+            stats.rays.add(&s.rays);
+            stats.thread_time += s.thread_time;
+            tree.add_records(records);
+            first = end;
+        }
+        tree.finish_iteration(k);
+        g.iterations += 1;
+        g.training_spp += spp;
+        last = began.elapsed();
+    }
+    g.training = start.elapsed();
+    stats.guide = Some(g);
+    tree
+}
+
+/// The guide a guided render of `scene` with `settings` learns before its final iteration (the
+/// same seeds and budget: the same tree), with the training's stats.
+pub fn learn_guide(scene: &Scene, settings: &RenderSettings) -> Result<(SdTree, RenderStats)> {
+    let camera = camera_for(scene, settings)?;
+    let plan = PassPlan::default();
+    with_threads(settings.threads, || {
+        let mut stats = RenderStats::default();
+        let start = Instant::now();
+        let c = (scene, &camera, settings, &plan);
+        let tree = match settings.strategy.sampler {
+            SamplerKind::Independent => train_guide(c, &independent, start, &mut stats),
+            SamplerKind::Stratified => train_guide(c, &stratified, start, &mut stats),
+            SamplerKind::Sobol => train_guide(c, &sobol, start, &mut stats),
+        };
+        stats.elapsed = start.elapsed();
+        (tree, stats)
+    })
+}
+
+/// The bounding box of the scene's triangles.
+fn scene_bounds(scene: &Scene) -> (glam::Vec3, glam::Vec3) {
+    let (mut lo, mut hi) = (
+        glam::Vec3::splat(f32::INFINITY),
+        glam::Vec3::splat(-f32::INFINITY),
+    );
+    for prim in 0..scene.accel.len() as u32 {
+        for v in scene.accel.vertices(prim) {
+            lo = lo.min(v);
+            hi = hi.max(v);
+        }
+    }
+    if lo.cmple(hi).all() {
+        (lo, hi)
+    } else {
+        (glam::Vec3::ZERO, glam::Vec3::ONE)
+    }
 }
 
 /// One tile's result: pixel sums and counters.
@@ -520,6 +701,8 @@ struct TileResult {
     time: Duration,
     /// Whether the stop flag ended the tile before its last pixel.
     cut: bool,
+    /// Its paths' guiding records, in sample order (training iterations only).
+    records: Vec<Record>,
 }
 
 /// The number of tiles of a `settings`-sized image.
@@ -527,15 +710,17 @@ fn tile_count(settings: &RenderSettings) -> u32 {
     settings.width.div_ceil(TILE) * settings.height.div_ceil(TILE)
 }
 
+#[allow(clippy::too_many_arguments)]
 fn render_with<S: Sampler>(
     scene: &Scene,
     camera: &Camera,
     settings: &RenderSettings,
     sampler: S,
     (range, tiles, stop): (Range<u64>, Range<u32>, Option<&AtomicBool>),
+    guide: Guide,
     film: &mut Film,
     progress: &dyn Progress,
-) -> (RenderStats, bool) {
+) -> (RenderStats, bool, Vec<Record>) {
     let start = Instant::now();
     let integrator = IntegratorSettings {
         max_depth: settings.max_depth,
@@ -544,6 +729,7 @@ fn render_with<S: Sampler>(
         light_points: settings.strategy.light_points,
         light_choice: settings.strategy.light_choice,
         time_traces: settings.time_traces,
+        guide_pdf_scale: settings.guide_pdf_scale,
     };
     let tiles_x = settings.width.div_ceil(TILE);
     let tiles: Vec<TileResult> = tiles
@@ -564,6 +750,7 @@ fn render_with<S: Sampler>(
                 nonfinite: 0,
                 time: Duration::ZERO,
                 cut: false,
+                records: Vec::new(),
             };
             let mut stack = TraceStack::default();
             'pixels: for y in origin.y..origin.y + size.y {
@@ -583,8 +770,16 @@ fn render_with<S: Sampler>(
                         // below SAMPLE_INDICES (checked by camera_for): a u32
                         sampler.start_pixel_sample(pixel, index as u32);
                         let ray = camera.generate_ray(pixel, CameraSample::draw(sampler).pixel);
-                        let l =
-                            radiance(scene, ray, sampler, &integrator, &mut tile.rays, &mut stack);
+                        let l = radiance_guided(
+                            scene,
+                            ray,
+                            sampler,
+                            &integrator,
+                            &mut tile.rays,
+                            &mut stack,
+                            guide.tree,
+                            guide.record.then_some(&mut tile.records),
+                        );
                         if l.is_finite() {
                             let v = l.as_dvec3();
                             sum += v;
@@ -605,7 +800,9 @@ fn render_with<S: Sampler>(
         .collect();
     let mut stats = RenderStats::default();
     let mut cut = false;
-    for tile in tiles {
+    let mut records = Vec::with_capacity(tiles.iter().map(|t| t.records.len()).sum());
+    for mut tile in tiles {
+        records.append(&mut tile.records);
         // the pixels a tile rendered, in its order (all of them unless it was cut short)
         let w = tile.size.x as usize;
         for (k, &(s, s2, n)) in tile.sums.iter().enumerate() {
@@ -622,5 +819,5 @@ fn render_with<S: Sampler>(
         stats.thread_time += tile.time;
     }
     stats.elapsed = start.elapsed();
-    (stats, cut)
+    (stats, cut, records)
 }

@@ -427,3 +427,83 @@ fn stats_report_the_time_split_and_change_no_pixel() {
     };
     assert!(read(&a) == read(&b), "--stats changed the image");
 }
+
+/// A guided render says how its time split between training and the final iteration and how big
+/// its tree grew, on `--stats` and in the EXR's metadata; `vrpt guide` writes its map and
+/// refuses what it cannot show in one line.
+#[test]
+fn guided_renders_report_their_training_and_guide_shows_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = common::cornell_path();
+    let exr = dir.path().join("g.exr");
+    let out = vrpt(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--directions",
+        "guided",
+        "--width",
+        "32",
+        "--height",
+        "32",
+        "--spp",
+        "16",
+        "--stats",
+        "-o",
+        exr.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    let line = err
+        .lines()
+        .find(|l| l.starts_with("guiding: training 7 spp in 3 iterations"))
+        .unwrap_or_else(|| panic!("no guiding line: {err}"));
+    assert!(
+        line.contains("spatial leaves") && line.contains("MiB"),
+        "{line}"
+    );
+    let img = vrpt::image_io::read_exr(&exr).unwrap();
+    let meta = vrpt::output::RenderMetadata::require(&img, &exr).unwrap();
+    let g = meta.guide.expect("guided metadata");
+    assert_eq!((g.iterations, g.training_spp), (3, 7));
+    assert!(g.leaves >= 1 && g.quad_nodes >= 1 && g.bytes > 0);
+    assert!(g.training_seconds > 0.0 && g.final_seconds > 0.0);
+    assert_eq!(meta.spp, 16);
+
+    let png = dir.path().join("guide.png");
+    let args = |extra: &[&str]| {
+        let mut a = vec![
+            "guide",
+            scene.to_str().unwrap(),
+            "--width",
+            "32",
+            "--height",
+            "32",
+            "--spp",
+            "16",
+            "--brute-spp",
+            "2",
+            "--map-width",
+            "32",
+            "-o",
+            png.to_str().unwrap(),
+        ];
+        a.extend_from_slice(extra);
+        vrpt(&a)
+    };
+    let out = args(&["--pixel", "16,28"]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(text.contains("total variation distance"), "{text}");
+    assert!(std::fs::metadata(&png).unwrap().len() > 1000);
+    assert_one_line_error(&args(&["--pixel", "40,2"]), "pixel outside", "outside");
+    assert_one_line_error(&args(&["--pixel", "4"]), "pixel without y", "X,Y");
+    assert_one_line_error(
+        &args(&["--pixel", "4,4", "--directions", "phong"]),
+        "not guided",
+        "guided",
+    );
+}

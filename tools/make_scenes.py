@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Generate the vrpt test scenes under scenes/.
 
-Writes five scene folders, each holding NAME.obj, NAME.mtl and scene.toml:
+Writes six scene folders, each holding NAME.obj, NAME.mtl and scene.toml:
 
   scenes/cornell-box/    the classic Cornell box from the published Cornell
                          measurements (mm), with a glossy tall box.
@@ -14,6 +14,9 @@ Writes five scene folders, each holding NAME.obj, NAME.mtl and scene.toml:
                          light (a 4D pixel x light-point integral).
   scenes/night-hall/     a long hall lit by 160 lights of different sizes,
                          powers and facings (the many-light scene).
+  scenes/door/           Veach's door: a dark room lit only through a door
+                         standing ajar from a brightly lit second room
+                         (the path-guiding scene).
 
 The files under scenes/ are committed output of this script; edit the script
 and rerun it rather than editing them by hand:
@@ -645,6 +648,122 @@ def night_hall():
     return m
 
 
+# ================================================================ 6. door
+def door():
+    """Veach's "door" setting: room A (the camera's, no light) and room B (a
+    bright ceiling light) share a wall at z = 0 whose doorway stands ajar:
+    the door, hinged at its right post, is turned 12 degrees into room B, so
+    light reaches room A only through a slit about 0.19 m wide.  A point in
+    room A sees the light itself only from a thin wedge of floor behind the
+    slit; next-event estimation elsewhere finds the light occluded, and BSDF
+    sampling finds the slit in a small fraction of its directions."""
+    name = "door"
+    m = Mesh(name)
+    m.material("wall", (0.7, 0.7, 0.68))
+    m.material("floor", (0.3, 0.25, 0.2), ks=(0.3, 0.3, 0.3), ns=60.0)
+    m.material("bright_wall", (0.75, 0.72, 0.65))
+    m.material("door", (0.55, 0.4, 0.3))
+    m.material("table", (0.15, 0.15, 0.2), ks=(0.6, 0.6, 0.6), ns=400.0)
+    m.material("box", (0.6, 0.2, 0.15))
+    m.material("light", (0.0, 0.0, 0.0), ke=(1600.0, 1440.0, 1200.0))
+    W, H, DA, DB = 4.0, 2.6, 5.0, 4.0  # width, height, depth of A (z>0) and B
+    x0, x1, dh = 2.5, 3.4, 2.1  # doorway
+    a_center = (W / 2, H / 2, DA / 2)
+    b_center = (W / 2, H / 2, -DB / 2)
+
+    def room(prefix, z0, z1, center, floor_mat, wall_mat):
+        m.group(prefix + "_floor", floor_mat)
+        m.face([(0, 0, z0), (W, 0, z0), (W, 0, z1), (0, 0, z1)],
+               toward=center)
+        m.group(prefix + "_ceiling", wall_mat)
+        m.face([(0, H, z0), (W, H, z0), (W, H, z1), (0, H, z1)],
+               toward=center)
+        m.group(prefix + "_walls", wall_mat)
+        m.face([(0, 0, z0), (0, 0, z1), (0, H, z1), (0, H, z0)],
+               toward=center)
+        m.face([(W, 0, z0), (W, 0, z1), (W, H, z1), (W, H, z0)],
+               toward=center)
+        zf = z1 if abs(z1) > abs(z0) else z0  # the far wall
+        m.face([(0, 0, zf), (W, 0, zf), (W, H, zf), (0, H, zf)],
+               toward=center)
+
+    room("a", 0.0, DA, a_center, "floor", "wall")
+    room("b", -DB, 0.0, b_center, "bright_wall", "bright_wall")
+    # the shared wall at z = 0, with the doorway; each side faces its room
+    for prefix, center, mat in (("a", a_center, "wall"),
+                                ("b", b_center, "bright_wall")):
+        m.group(prefix + "_door_wall", mat)
+        m.face([(0, 0, 0), (x0, 0, 0), (x0, H, 0), (0, H, 0)], toward=center)
+        m.face([(x1, 0, 0), (W, 0, 0), (W, H, 0), (x1, H, 0)], toward=center)
+        m.face([(x0, dh, 0), (x1, dh, 0), (x1, H, 0), (x0, H, 0)],
+               toward=center)
+    # the door: a 4 cm slab hinged at x1, turned into room B
+    ang = math.radians(12.0)
+    wdoor, t = x1 - x0, 0.04
+    u = (-math.cos(ang), 0.0, -math.sin(ang))  # from the hinge to the free edge
+    nrm = (math.sin(ang), 0.0, -math.cos(ang))  # toward room B
+    hinge = (x1, 0.0, 0.0)
+    corners = []
+    for a in (0.0, wdoor):
+        for b in (0.0, -t):
+            corners.append(add(add(hinge, mul(u, a)), mul(nrm, -b - 0.001)))
+    # corners: (hinge, front), (hinge, back), (free, front), (free, back)
+    c = centroid(corners + [add(p, (0, dh - 0.005, 0)) for p in corners])
+    m.group("door", "door")
+
+    def slab_face(pts):
+        m.face(pts, away_from=c)
+
+    top = [add(p, (0, dh - 0.005, 0)) for p in corners]
+    hf, hb, ff, fb = corners
+    thf, thb, tff, tfb = top
+    slab_face([hf, ff, tff, thf])
+    slab_face([hb, fb, tfb, thb])
+    slab_face([ff, fb, tfb, tff])
+    slab_face([hf, hb, thb, thf])
+    slab_face([thf, tff, tfb, thb])
+    # the slit: from the free edge to the doorway's left post
+    slit = length(sub((x0, 0.0, 0.0), ff))
+    assert 0.1 < slit < 0.3, slit
+    # room A: a glossy dark table top and a diffuse box
+    m.group("table", "table")
+    ty, tc = 0.75, (1.3, 0.75, 2.4)
+    m.face([(0.7, ty, 1.9), (1.9, ty, 1.9), (1.9, ty, 2.9), (0.7, ty, 2.9)],
+           direction=(0, 1, 0))
+    m.group("box", "box")
+    bc = (3.1, 0.25, 1.6)
+    lo, hi = (2.85, 0.0, 1.35), (3.35, 0.5, 1.85)
+    for axis in range(3):
+        for side in (0, 1):
+            p = [lo[0], lo[1], lo[2]]
+            q = [hi[0], hi[1], hi[2]]
+            v = (lo, hi)[side][axis]
+            pts = []
+            others = [i for i in range(3) if i != axis]
+            for a, b in ((0, 0), (1, 0), (1, 1), (0, 1)):
+                pt = [0.0, 0.0, 0.0]
+                pt[axis] = v
+                pt[others[0]] = (lo, hi)[a][others[0]]
+                pt[others[1]] = (lo, hi)[b][others[1]]
+                pts.append(tuple(pt))
+            if axis == 1 and side == 0:
+                continue  # the bottom lies on the floor
+            m.face(pts, away_from=bc)
+    _ = tc
+    # room B's light: a 0.6 m square just below its ceiling, facing down
+    m.group("light", "light")
+    lx, lz, s2 = 1.3, -2.2, 0.3
+    m.face([(lx - s2, H - 0.01, lz - s2), (lx + s2, H - 0.01, lz - s2),
+            (lx + s2, H - 0.01, lz + s2), (lx - s2, H - 0.01, lz + s2)],
+           direction=(0, -1, 0))
+    folder = os.path.join(SCENES, name)
+    m.write(folder)
+    write_toml(folder, name, (0.5, 1.5, 4.8), (2.6, 0.9, 0.0), 65.0,
+               (0.0, 0.0, 0.0), 256, 192, 64, 10)
+    print("door: slit %.3f m wide" % slit)
+    return m
+
+
 README = """\
 # vrpt test scenes
 
@@ -666,6 +785,10 @@ Generated by `tools/make_scenes.py` (committed output; regenerate with
   and cove strips on ledges that carry most of the power but face up, away
   from everything below them); the many-light scene, where choosing lights by power fails and the
   light tree (`--light-choice tree`) does not.
+- `door/`: Veach's door: a dark room lit only through a door standing ajar
+  from a brightly lit second room; next-event estimation almost never reaches
+  the light and BSDF sampling rarely finds the slit. The path-guiding scene
+  (`--directions guided`).
 """
 
 
@@ -675,7 +798,8 @@ def main():
               ("glossy-plates", glossy_plates()),
               ("checker-plane", checker_plane()),
               ("lit-checker", lit_checker()),
-              ("night-hall", night_hall())]
+              ("night-hall", night_hall()),
+              ("door", door())]
     with open(os.path.join(SCENES, "README.md"), "w") as fh:
         fh.write(README)
     for name, mesh in counts:

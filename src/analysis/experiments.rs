@@ -439,6 +439,7 @@ fn run_settings(st: &Strategy, s: &ExperimentSettings, spp: u32, seed: u64) -> R
         strategy: *st,
         threads: None,
         time_traces: false,
+        guide_pdf_scale: 1.0,
     }
 }
 

@@ -164,6 +164,41 @@ pub fn write_error_map(path: &Path, image: &RgbImage, reference: &RgbImage) -> R
     Ok((lo, hi))
 }
 
+/// Write two directional densities side by side as one false-colour PNG (log scale, shared):
+/// `left` and `right` are `w × h` maps (row-major, row 0 at the top), each labelled, over one
+/// colour bar titled `title`. Each map is drawn at 2× when it is small. Returns the scale.
+pub fn write_density_pair(
+    path: &Path,
+    (left, right): (&[f64], &[f64]),
+    (w, h): (u32, u32),
+    (left_label, right_label): (&str, &str),
+    title: &str,
+) -> Result<(f64, f64)> {
+    let max = left
+        .iter()
+        .chain(right)
+        .copied()
+        .filter(|v| v.is_finite())
+        .fold(0.0f64, f64::max)
+        .max(1e-30);
+    // four decades below the largest value
+    let (lo, hi) = (max * 1e-4, max);
+    let (a, b) = (false_colour(left, lo, hi), false_colour(right, lo, hi));
+    let scale = (256 / w.max(h)).clamp(1, 2);
+    let gap = 16;
+    let label_h = 22;
+    let mut c = Canvas::new(2 * w * scale + gap, h * scale + label_h + BAR_H);
+    c.blit(0, label_h, w, h, scale, &|k| a[k]);
+    c.blit(w * scale + gap, label_h, w, h, scale, &|k| b[k]);
+    c.text(&[
+        (left_label.to_string(), 4, 4),
+        (right_label.to_string(), w * scale + gap + 4, 4),
+    ])?;
+    c.colour_bar(0, h * scale + label_h, lo, hi, title)?;
+    c.write(path)?;
+    Ok((lo, hi))
+}
+
 /// What the error maps show.
 const ERROR_TITLE: &str = "relative squared error (x−r)²/(r²+0.01), log scale";
 

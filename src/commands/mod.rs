@@ -7,10 +7,12 @@
 //! - [`render`]: a scene to an EXR or PNG, in passes, shards, under a time limit or a stop flag;
 //! - [`merge`]: renders of the same scene and settings into one image;
 //! - [`diff`]: an image against a reference: metrics, regions, error map, report;
-//! - [`experiment`]: `compare` and `converge`, with their CSV, JSON, grid, plots and report.
+//! - [`experiment`]: `compare` and `converge`, with their CSV, JSON, grid, plots and report;
+//! - [`guide`]: what path guiding learned at one point, beside the incident radiance there.
 
 pub mod diff;
 pub mod experiment;
+pub mod guide;
 pub mod merge;
 pub mod render;
 

@@ -124,6 +124,7 @@ impl RenderRequest {
             strategy: self.strategy,
             threads: self.threads,
             time_traces: self.time_traces,
+            guide_pdf_scale: 1.0,
         };
         let plan = PassPlan {
             pass_spp: self

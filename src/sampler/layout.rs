@@ -5,7 +5,11 @@
 //! |---|---|
 //! | [`CAMERA_DIMS`] | the point in the pixel (2D) |
 //! | [`BOUNCE_DIMS`], at every vertex after the camera | light choice (1D), point on the light (2D), lobe choice (1D), direction (2D), Russian roulette (1D) |
+//! | then [`GUIDE_DIMS`], with `--directions guided` only | guide or BSDF (1D), guided direction (2D) |
 //!
+//! The guide's dimensions come last in a bounce so that every other dimension keeps its place in
+//! the bounce (the first bounce's indices are those of every other strategy); a guided render
+//! strides 8 dimensions per bounce, the others 5.
 //! The light dimensions come first because next-event estimation happens first at a vertex.
 //! Every bounce draws all of its dimensions, used or not (`--lights bsdf` draws the light
 //! dimensions too), so a dimension index means the same
@@ -37,6 +41,9 @@ pub const BOUNCE_DIMS: [Dim; 5] = [
     Dim::One("russian roulette"),
 ];
 
+/// The dimensions a bounce of `--directions guided` draws after [`BOUNCE_DIMS`].
+pub const GUIDE_DIMS: [Dim; 2] = [Dim::One("guide or bsdf"), Dim::Two("guided direction")];
+
 /// The numbers of the camera ray.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CameraSample {
@@ -65,6 +72,10 @@ pub struct BounceSample {
     pub direction: Vec2,
     /// Decides Russian roulette.
     pub roulette: f32,
+    /// Chooses between the guide and the BSDF (guided directions only; else 0).
+    pub guide: f32,
+    /// Places the guided direction (guided directions only; else 0).
+    pub guided_direction: Vec2,
 }
 
 impl BounceSample {
@@ -72,15 +83,23 @@ impl BounceSample {
     /// dimensions are skipped, not drawn, and read as zero: the layout stays the same.
     #[inline(always)]
     pub fn draw<S: Sampler>(s: &mut S, lights: bool) -> Self {
-        Self::draw_needed(s, lights, true, true)
+        Self::draw_needed(s, lights, true, true, false)
     }
 
     /// [`BounceSample::draw`] that also skips the lobe choice when `lobe` is false (a BSDF of
     /// one lobe) and the roulette value when `roulette` is false (a bounce before roulette
     /// starts). A skipped dimension reads as zero and every other value is the one `draw` gives:
     /// each sampler's value depends on the dimension's index only, and skipping keeps the index.
+    /// With `guided` it then draws [`GUIDE_DIMS`] (a guided render's layout; without, they are
+    /// not part of the layout and read as zero).
     #[inline(always)]
-    pub fn draw_needed<S: Sampler>(s: &mut S, lights: bool, lobe: bool, roulette: bool) -> Self {
+    pub fn draw_needed<S: Sampler>(
+        s: &mut S,
+        lights: bool,
+        lobe: bool,
+        roulette: bool,
+        guided: bool,
+    ) -> Self {
         let (light, light_point) = if lights {
             (s.next_1d(), s.next_2d())
         } else {
@@ -101,12 +120,19 @@ impl BounceSample {
             s.skip_1d(1);
             0.0
         };
+        let (guide, guided_direction) = if guided {
+            (s.next_1d(), s.next_2d())
+        } else {
+            (0.0, Vec2::ZERO)
+        };
         BounceSample {
             light,
             light_point,
             lobe,
             direction,
             roulette,
+            guide,
+            guided_direction,
         }
     }
 }
@@ -145,8 +171,8 @@ mod tests {
                 let mut s = sampler.clone();
                 s.start_pixel_sample(pixel, i);
                 assert_eq!(CameraSample::draw(&mut s), c, "{name}");
-                let a = BounceSample::draw_needed(&mut s, lights, lobe, roulette);
-                let b = BounceSample::draw_needed(&mut s, lights, lobe, roulette);
+                let a = BounceSample::draw_needed(&mut s, lights, lobe, roulette, false);
+                let b = BounceSample::draw_needed(&mut s, lights, lobe, roulette, false);
                 for (got, want) in [(a, first), (b, second)] {
                     let what = format!(
                         "{name} sample {i} lights {lights} lobe {lobe} roulette {roulette}"

@@ -1,0 +1,269 @@
+//! `vrpt guide`: what path guiding learned at one point of a scene, beside the truth.
+//!
+//! The guide of a guided render of the scene (its size, spp and seed: the same training, so the
+//! same tree) is learned, and the camera ray through the centre of the chosen pixel is traced to
+//! its first hit `x`. Two maps of the sphere of directions at `x`, both in the guide's
+//! cylindrical equal-area map (`cosθ` from world +z down the rows, from +1 at the top, and `φ`
+//! about +z along the columns, so that equal areas are equal solid angles):
+//!
+//! - **learned**: the density the guide samples at `x` (its leaf's quadtree), per unit area of
+//!   the map;
+//! - **incident**: the radiance arriving at `x` from each direction, by brute force: every texel
+//!   the mean of `brute_spp` paths (`stratified+phong+mis`) from `x` through jittered directions
+//!   of the texel, zero below the surface; normalized to a density like the other map.
+//!
+//! Both on one log colour scale. Under `nee` and `mis` the guide does not learn emitters that
+//! `x` sees directly (next-event estimation carries them), so a light in view of `x` appears in
+//! the right map only. The total variation distance between the two densities,
+//! `½ Σ |p − q| ΔA`, says how much of the sampling mass sits where the light does not come from.
+
+use super::Written;
+use crate::analysis::plots::write_density_pair;
+use crate::bsdf::Directions;
+use crate::camera::Camera;
+use crate::error::{Error, Result};
+use crate::guiding::{canonical_to_dir, TreeSize};
+use crate::image_io::{check_writable, Format};
+use crate::integrator::{radiance, IntegratorSettings, RayCounts};
+use crate::render::{learn_guide, RenderSettings};
+use crate::sampler::{IndependentSampler, Sampler};
+use crate::scene::{self, Scene};
+use crate::strategy::Strategy;
+use glam::{UVec2, Vec2, Vec3};
+use rayon::prelude::*;
+use std::path::PathBuf;
+
+/// What to show: the flags of `vrpt guide` (the binary adds the strategy flags).
+#[derive(Clone, Debug, clap::Args)]
+pub struct GuideRequest {
+    /// The scene: an .obj file, a scene.toml, or a folder holding a scene.toml.
+    pub scene: PathBuf,
+    /// The pixel whose first hit is shown: X,Y (column, row from the top left).
+    #[arg(long, value_parser = parse_pixel)]
+    pub pixel: (u32, u32),
+    /// The PNG to write.
+    #[arg(short, long, default_value = "guide.png")]
+    pub output: PathBuf,
+    /// Image width of the render whose guide is learned (default: the scene's).
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Image height (default: the scene's).
+    #[arg(long)]
+    pub height: Option<u32>,
+    /// Samples per pixel of that render: training takes about half as many (default: the scene's).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    pub spp: Option<u32>,
+    /// Max path segments (default: the scene's).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    pub max_depth: Option<u32>,
+    /// Seed of the render whose guide is learned.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// The strategy (its directions must be `guided`): set by the binary from its flags.
+    #[arg(skip)]
+    pub strategy: Strategy,
+    /// Paths per texel of the brute-force map of incident radiance.
+    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..))]
+    pub brute_spp: u32,
+    /// Columns of each map (rows: half as many).
+    #[arg(long, default_value_t = 128, value_parser = clap::value_parser!(u32).range(2..4097))]
+    pub map_width: u32,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+}
+
+/// `X,Y` as two pixel coordinates.
+pub fn parse_pixel(s: &str) -> std::result::Result<(u32, u32), String> {
+    let (x, y) = s
+        .split_once(',')
+        .ok_or_else(|| format!("'{s}': give the pixel as X,Y"))?;
+    let p = |v: &str| {
+        v.trim()
+            .parse::<u32>()
+            .map_err(|_| format!("'{s}': pixel coordinates are whole numbers ≥ 0"))
+    };
+    Ok((p(x)?, p(y)?))
+}
+
+/// What was learned at the point.
+#[derive(Clone, Debug)]
+pub struct GuideOutcome {
+    /// The first hit of the pixel's ray.
+    pub point: Vec3,
+    /// The total variation distance between the learned and the incident density.
+    pub total_variation: f64,
+    /// The whole tree's size, and the node count of the point's quadtree.
+    pub tree: TreeSize,
+    pub point_nodes: usize,
+    /// Seconds of training.
+    pub training_seconds: f64,
+    pub written: Written,
+}
+
+impl GuideOutcome {
+    /// What `vrpt guide` prints.
+    pub fn summary(&self) -> String {
+        format!(
+            "first hit at ({:.3}, {:.3}, {:.3}): its quadtree has {} nodes; the tree {} leaves, \
+             {} quadtree nodes, {:.2} MiB, trained in {:.2} s\n\
+             total variation distance between the learned and the incident density: {:.3}\n\
+             wrote {}\n",
+            self.point.x,
+            self.point.y,
+            self.point.z,
+            self.point_nodes,
+            self.tree.leaves,
+            self.tree.quad_nodes,
+            self.tree.bytes as f64 / (1024.0 * 1024.0),
+            self.training_seconds,
+            self.total_variation,
+            self.written.path.display()
+        )
+    }
+}
+
+/// Learn the guide, trace the pixel, draw both maps.
+pub fn run(req: &GuideRequest) -> Result<GuideOutcome> {
+    if req.strategy.directions != Directions::Guided {
+        return Err(Error::Settings(format!(
+            "vrpt guide shows a guided strategy's guide, not {} (use --directions guided)",
+            req.strategy.axes_name()
+        )));
+    }
+    if req.brute_spp == 0 || req.map_width < 2 {
+        return Err(Error::Settings(
+            "--brute-spp must be at least 1 and --map-width at least 2".into(),
+        ));
+    }
+    if Format::from_path(&req.output)? != Format::Png {
+        return Err(Error::Settings(format!(
+            "{}: vrpt guide writes a PNG",
+            req.output.display()
+        )));
+    }
+    check_writable(&req.output)?;
+    let scene = scene::load(&req.scene)?;
+    let base = RenderSettings::for_scene(&scene);
+    let settings = RenderSettings {
+        width: req.width.unwrap_or(base.width),
+        height: req.height.unwrap_or(base.height),
+        spp: req.spp.unwrap_or(base.spp),
+        max_depth: req.max_depth.unwrap_or(base.max_depth),
+        seed: req.seed,
+        strategy: req.strategy,
+        threads: req.threads,
+        ..base
+    };
+    let (px, py) = req.pixel;
+    if px >= settings.width || py >= settings.height {
+        return Err(Error::Settings(format!(
+            "pixel {px},{py} lies outside the {}x{} image",
+            settings.width, settings.height
+        )));
+    }
+    let (tree, stats) = learn_guide(&scene, &settings)?;
+    let camera = Camera::new(&scene.camera, settings.width, settings.height)
+        .ok_or_else(|| Error::Settings("degenerate camera".into()))?;
+    let (o, d) = camera.generate_ray(UVec2::new(px, py), Vec2::splat(0.5));
+    let hit = scene
+        .accel
+        .intersect(o, d, f32::INFINITY)
+        .ok_or_else(|| Error::Settings(format!("the ray of pixel {px},{py} hits nothing")))?;
+    let s = scene.surface(&hit);
+    let n = if s.ng.dot(-d) > 0.0 { s.ng } else { -s.ng };
+    let leaf = tree.leaf_at(s.p);
+    let dtree = tree.sampling(leaf);
+    let (w, h) = (req.map_width, req.map_width / 2);
+    // texel (column i: φ, row j: cosθ from +1 at the top) ↔ canonical (u, v) = (cosθ+1)/2, φ/2π
+    let canonical = |i: f32, j: f32| Vec2::new(1.0 - j / h as f32, i / w as f32);
+    let learned: Vec<f64> = (0..w * h)
+        .map(|k| {
+            let (i, j) = ((k % w) as f32 + 0.5, (k / w) as f32 + 0.5);
+            dtree.pdf_canonical(canonical(i, j)) as f64
+        })
+        .collect();
+    let integrator = IntegratorSettings {
+        max_depth: settings.max_depth.saturating_sub(1).max(1),
+        directions: Directions::Phong,
+        lights: crate::lights::LightStrategy::Mis,
+        light_points: settings.strategy.light_points,
+        light_choice: settings.strategy.light_choice,
+        time_traces: false,
+        guide_pdf_scale: 1.0,
+    };
+    let origin = s.p + n * scene.ray_epsilon;
+    let brute = |scene: &Scene| -> Vec<f64> {
+        (0..h)
+            .into_par_iter()
+            .flat_map_iter(|j| {
+                let mut stack = crate::accel::TraceStack::default();
+                let mut rays = RayCounts::default();
+                let mut sampler = IndependentSampler::new(req.seed ^ 0x6775_6964);
+                (0..w)
+                    .map(|i| {
+                        let mut sum = 0.0f64;
+                        for k in 0..req.brute_spp {
+                            sampler.start_pixel_sample(UVec2::new(i, j), k);
+                            let u = sampler.next_2d();
+                            let dir = canonical_to_dir(canonical(i as f32 + u.x, j as f32 + u.y));
+                            if dir.dot(n) <= 0.0 {
+                                continue;
+                            }
+                            let l = radiance(
+                                scene,
+                                (origin, dir),
+                                &mut sampler,
+                                &integrator,
+                                &mut rays,
+                                &mut stack,
+                            );
+                            if l.is_finite() {
+                                sum += ((l.x + l.y + l.z) / 3.0) as f64;
+                            }
+                        }
+                        sum / req.brute_spp as f64
+                    })
+                    .collect::<Vec<_>>()
+            })
+            .collect()
+    };
+    let mut incident = crate::render::with_threads(req.threads, || brute(&scene))?;
+    // as densities per unit area of the map: mean 1
+    let texels = (w * h) as f64;
+    let total: f64 = incident.iter().sum::<f64>() / texels;
+    if total > 0.0 {
+        incident.iter_mut().for_each(|v| *v /= total);
+    }
+    let total_variation = if total > 0.0 && dtree.total() > 0.0 {
+        0.5 * learned
+            .iter()
+            .zip(&incident)
+            .map(|(p, q)| (p - q).abs())
+            .sum::<f64>()
+            / texels
+    } else {
+        1.0
+    };
+    write_density_pair(
+        &req.output,
+        (&learned, &incident),
+        (w, h),
+        (
+            "learned guide (density)",
+            "incident radiance, brute force (normalized)",
+        ),
+        "density per unit area of the equal-area map, log scale",
+    )?;
+    Ok(GuideOutcome {
+        point: s.p,
+        total_variation,
+        tree: tree.size(),
+        point_nodes: dtree.node_count(),
+        training_seconds: stats.elapsed.as_secs_f64(),
+        written: Written {
+            path: req.output.clone(),
+            note: format!("total variation distance {total_variation:.3}"),
+        },
+    })
+}

@@ -1,0 +1,205 @@
+//! Path guiding's directional quadtrees: sampling agrees with the pdf (chi-square), the pdf
+//! integrates to 1, and the maps between directions and the canonical square agree — for a
+//! hand-built tree and for trees learned in the shipped Cornell box.
+//!
+//! The chi-square bins the canonical square `[0,1)²` into a 32×32 grid. A quadtree's density is
+//! constant on dyadic squares no deeper than the tree, so each bin's expected mass is computed
+//! exactly by the midpoint rule on the `2^D × 2^D` grid, `D` the tree's depth (at least 5: a
+//! bin is then a whole number of cells). Bins expecting fewer than 5 samples are pooled. The
+//! bound: p > 1e-4 per tree (four trees; family-wise about 4e-4 under a right sampler); a
+//! sampler that puts 5% of a quadrant of mass 0.2 elsewhere moves 200,000·0.01 = 2000 samples,
+//! far beyond the ≈ √(4·10⁴) = 200 noise of such a quadrant: the power test shows it caught.
+
+mod common;
+
+use glam::{Vec2, Vec3};
+use rand::{rngs::SmallRng, Rng, SeedableRng};
+use vrpt::bsdf::Directions;
+use vrpt::guiding::{canonical_to_dir, dir_to_canonical, DTree};
+use vrpt::lights::LightStrategy;
+use vrpt::render::{learn_guide, RenderSettings};
+use vrpt::sampler::SamplerKind;
+use vrpt::stats::chi2_sf;
+use vrpt::strategy::Strategy;
+
+const BINS: usize = 32;
+const SAMPLES: usize = 200_000;
+
+/// Expected probability per bin of `pdf` (piecewise constant on dyadic squares of depth ≤ `depth`).
+fn expected(pdf: impl Fn(Vec2) -> f32, depth: u32) -> Vec<f64> {
+    let cells = 1usize << depth.max(5);
+    let per_bin = cells / BINS;
+    let mut e = vec![0.0f64; BINS * BINS];
+    let area = 1.0 / (cells * cells) as f64;
+    for j in 0..cells {
+        for i in 0..cells {
+            let p = Vec2::new(
+                (i as f32 + 0.5) / cells as f32,
+                (j as f32 + 0.5) / cells as f32,
+            );
+            e[(j / per_bin) * BINS + i / per_bin] += pdf(p) as f64 * area;
+        }
+    }
+    e
+}
+
+/// The chi-square p-value of `sample` against the bin probabilities `expected`, and the total
+/// expected probability (the pdf's integral).
+fn chi2(mut sample: impl FnMut(Vec2) -> Vec2, expected: &[f64], seed: u64) -> (f64, f64) {
+    let mut rng = SmallRng::seed_from_u64(seed);
+    let mut observed = vec![0.0f64; BINS * BINS];
+    for _ in 0..SAMPLES {
+        let p = sample(Vec2::new(rng.random(), rng.random()));
+        assert!(p.x >= 0.0 && p.x < 1.0 && p.y >= 0.0 && p.y < 1.0, "{p}");
+        let (i, j) = ((p.x * BINS as f32) as usize, (p.y * BINS as f32) as usize);
+        observed[j.min(BINS - 1) * BINS + i.min(BINS - 1)] += 1.0;
+    }
+    let integral: f64 = expected.iter().sum();
+    // pool bins expecting fewer than 5 samples, smallest first
+    let mut bins: Vec<(f64, f64)> = expected
+        .iter()
+        .map(|e| e * SAMPLES as f64)
+        .zip(observed)
+        .collect();
+    bins.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut pooled = Vec::new();
+    let (mut pe, mut po) = (0.0, 0.0);
+    for (e, o) in bins {
+        if e < 5.0 || pe > 0.0 && pe < 5.0 {
+            pe += e;
+            po += o;
+            if pe >= 5.0 {
+                pooled.push((pe, po));
+                pe = 0.0;
+                po = 0.0;
+            }
+        } else {
+            pooled.push((e, o));
+        }
+    }
+    if pe > 0.0 {
+        pooled.push((pe, po));
+    }
+    let stat: f64 = pooled
+        .iter()
+        .map(|(e, o)| {
+            if *e > 0.0 {
+                (o - e).powi(2) / e
+            } else {
+                *o * 1e9
+            }
+        })
+        .sum();
+    (chi2_sf(stat, (pooled.len() - 1) as f64), integral)
+}
+
+fn check_tree(name: &str, t: &DTree, seed: u64) {
+    let e = expected(|p| t.pdf_canonical(p), t.depth() + 1);
+    let (p, integral) = chi2(|u| t.sample_canonical(u), &e, seed);
+    eprintln!(
+        "{name}: {} nodes, depth {}, chi-square p {p:.4}, ∫pdf {integral:.6}",
+        t.node_count(),
+        t.depth()
+    );
+    assert!((integral - 1.0).abs() < 1e-4, "{name}: ∫pdf = {integral}");
+    assert!(p > 1e-4, "{name}: chi-square p = {p}");
+    // the world-direction routines are the canonical ones through the equal-area map
+    let mut rng = SmallRng::seed_from_u64(seed + 1);
+    for _ in 0..1000 {
+        let u = Vec2::new(rng.random(), rng.random());
+        let d = t.sample(u);
+        assert!((d.length() - 1.0).abs() < 1e-5);
+        let c = t.sample_canonical(u);
+        assert!((canonical_to_dir(c) - d).length() < 1e-6);
+        let back = dir_to_canonical(d);
+        // dω = 4π du dv
+        let (a, b) = (
+            t.pdf(d),
+            t.pdf_canonical(back) / (4.0 * std::f32::consts::PI),
+        );
+        assert!((a - b).abs() <= 1e-5 * a.max(b), "{a} {b}");
+    }
+}
+
+/// A hand-built tree: uneven energies, a split quadrant, a zero-energy quadrant (never sampled,
+/// pdf 0) and a deep chain.
+fn hand_built() -> DTree {
+    DTree::from_nodes(&[
+        ([0.0, 0.0, 5.0, 1.0], [1, 0, 2, 0]),
+        ([1.0, 3.0, 0.0, 2.0], [0, 0, 0, 3]),
+        ([0.5, 0.25, 0.125, 4.0], [0, 0, 0, 0]),
+        ([2.0, 1.0, 1.0, 7.0], [0, 0, 0, 4]),
+        ([1.0, 2.0, 3.0, 4.0], [0, 0, 0, 0]),
+    ])
+}
+
+#[test]
+fn hand_built_quadtree_samples_its_pdf() {
+    let t = hand_built();
+    assert_eq!(t.depth(), 4);
+    // a zero-energy quadrant has pdf 0 and is never drawn
+    assert_eq!(t.pdf_canonical(Vec2::new(0.7, 0.2)), 0.0);
+    check_tree("hand-built", &t, common::seed(1));
+}
+
+/// A sampler off by 5% is caught: the hand-built tree sampled with about 5% of the samples of
+/// one root quadrant (u < ½, v ≥ ½: a fifth of the mass) mirrored into another, against the
+/// true pdf.
+#[test]
+fn a_wrong_quadtree_sampler_is_caught() {
+    let t = hand_built();
+    let e = expected(|p| t.pdf_canonical(p), t.depth() + 1);
+    let (p, _) = chi2(
+        |u| {
+            let c = t.sample_canonical(u);
+            let in_q2 = c.x < 0.5 && c.y >= 0.5;
+            // the quadrant's samples drawn with u.x < 0.05 (about 5% of them: the column is
+            // chosen by u.x < 0.96, the row by u.y) land mirrored in the quadrant beside it
+            if in_q2 && u.x < 0.05 {
+                Vec2::new(1.0 - c.x, c.y).min(Vec2::splat(0.999_999))
+            } else {
+                c
+            }
+        },
+        &e,
+        common::seed(2),
+    );
+    assert!(p < 1e-10, "a 5% error must be caught: p = {p}");
+}
+
+/// Trees learned in the shipped Cornell box (guided MIS, 64×64 at 64 spp: 31 spp of training):
+/// the leaves at a floor point, a wall point and the tall box's top.
+#[test]
+fn learned_quadtrees_sample_their_pdf() {
+    let scene = common::shipped("cornell-box");
+    let settings = RenderSettings {
+        width: 64,
+        height: 64,
+        spp: 64,
+        max_depth: 6,
+        seed: common::seed(5),
+        strategy: Strategy::of(
+            SamplerKind::Stratified,
+            Directions::Guided,
+            LightStrategy::Mis,
+        ),
+        ..Default::default()
+    };
+    let (tree, stats) = learn_guide(&scene, &settings).unwrap();
+    let g = stats.guide.expect("guided training reports itself");
+    assert_eq!(g.training_spp, 31);
+    assert!(tree.size().leaves > 1, "{:?}", tree.size());
+    for (k, p) in [
+        Vec3::new(278.0, 0.0, 280.0),
+        Vec3::new(0.0, 300.0, 300.0),
+        Vec3::new(370.0, 330.0, 350.0),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let t = tree.sampling(tree.leaf_at(p));
+        assert!(t.total() > 0.0, "the leaf at {p} learned nothing");
+        assert!(t.node_count() > 4, "{p}: {} nodes", t.node_count());
+        check_tree(&format!("learned at {p}"), t, common::seed(10 + k as u64));
+    }
+}
