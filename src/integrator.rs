@@ -351,28 +351,29 @@ pub fn radiance_guided<S: Sampler>(
         let (wi, bs, mix) = match g {
             Some(g) => {
                 // one-sample MIS of the guide and the BSDF, weighted by the mixture pdf
-                let (wi, c, wi_local) = if u.guide < g.alpha {
+                // (direction, canonical point, local direction, f, BSDF pdf)
+                let (wi, c, wi_local, f, p_bsdf) = if u.guide < g.alpha {
                     let c = g.dtree.sample_canonical(u.guided_direction);
                     let wi = canonical_to_dir(c);
-                    (wi, c, frame.to_local(wi))
+                    let wi_local = frame.to_local(wi);
+                    if wi_local.z <= 0.0 {
+                        break; // a guided direction below the surface: a failed sample
+                    }
+                    let p_bsdf = bsdf.pdf(wo_local, wi_local, settings.directions);
+                    (wi, c, wi_local, bsdf.eval(wo_local, wi_local), p_bsdf)
                 } else {
                     let Some(bs) = bsdf.sample(wo_local, u.lobe, u.direction, settings.directions)
                     else {
                         break;
                     };
                     let wi = frame.to_world(bs.wi);
-                    (wi, dir_to_canonical(wi), bs.wi)
+                    (wi, dir_to_canonical(wi), bs.wi, bs.f, bs.pdf)
                 };
-                if wi_local.z <= 0.0 {
-                    break; // a guided direction below the surface: a failed sample
-                }
-                let p_bsdf = bsdf.pdf(wo_local, wi_local, settings.directions);
                 let (pdf, p_guide) = g.mixture_pdf_canonical(c, p_bsdf);
                 let pdf = pdf * settings.guide_pdf_scale;
                 if !(pdf > 0.0 && pdf.is_finite()) {
                     break;
                 }
-                let f = bsdf.eval(wo_local, wi_local);
                 let bs = crate::bsdf::BsdfSample {
                     wi: wi_local,
                     f,

@@ -249,10 +249,7 @@ pub fn run(req: &GuideRequest) -> Result<GuideOutcome> {
         &req.output,
         (&learned, &incident),
         (w, h),
-        (
-            "learned guide (density)",
-            "incident radiance, brute force (normalized)",
-        ),
+        ("learned guide (density)", "incident radiance, brute force"),
         "density per unit area of the equal-area map, log scale",
     )?;
     Ok(GuideOutcome {
