@@ -322,6 +322,13 @@ def guiding():
     print("\n" + guide_lines[len(guide_lines) // 2])
 
 
+@section("sampler")
+def sampler():
+    print("`cargo run --release --example custom_sampler`:\n")
+    r = run(["cargo", "run", "--release", "-q", "--example", "custom_sampler"])
+    print(r.stdout.strip())
+
+
 @section("scaling")
 def scaling():
     print("`cargo run --release --example scaling`:\n")
