@@ -507,3 +507,54 @@ fn guided_renders_report_their_training_and_guide_shows_it() {
         "guided",
     );
 }
+
+/// A guided render under `--time-limit` spends its training and its final iteration inside the
+/// limit's passes: it trains (iterations of 1, 2, 4, … spp, at least one), stops training on time
+/// rather than at half of an absurd spp, and its recorded time includes the training.
+#[test]
+fn time_limited_guided_render_trains_inside_the_limit() {
+    let dir = tempfile::tempdir().unwrap();
+    let exr = dir.path().join("t.exr");
+    let out = vrpt(&[
+        "render",
+        common::cornell_path().to_str().unwrap(),
+        "-o",
+        exr.to_str().unwrap(),
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--spp",
+        "100000000",
+        "--pass-spp",
+        "4",
+        "--time-limit",
+        "0.5",
+        "--directions",
+        "guided",
+        "--quiet",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let img = vrpt::image_io::read_exr(&exr).unwrap();
+    let m = vrpt::output::RenderMetadata::from_attributes(&img.metadata).unwrap();
+    let g = m.guide.expect("a guided render records its training");
+    assert!(g.iterations >= 1);
+    assert_eq!(g.training_spp, (1u64 << g.iterations) - 1);
+    // half of 10⁸ spp of training would take hours: the time limit ended it
+    assert!(g.training_spp < 50_000_000, "{g:?}");
+    assert!(
+        m.spp >= 4 && m.spp.is_multiple_of(4) && m.spp < 100_000_000,
+        "spp {}",
+        m.spp
+    );
+    assert!(m.render_seconds >= 0.5, "{}", m.render_seconds);
+    assert!(
+        g.training_seconds < m.render_seconds,
+        "{g:?} {}",
+        m.render_seconds
+    );
+}
