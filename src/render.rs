@@ -76,6 +76,19 @@ impl Default for RenderSettings {
 }
 
 impl RenderSettings {
+    /// What the integrator is told of these settings.
+    pub fn integrator(&self) -> IntegratorSettings {
+        IntegratorSettings {
+            max_depth: self.max_depth,
+            directions: self.strategy.directions,
+            lights: self.strategy.lights,
+            light_points: self.strategy.light_points,
+            light_choice: self.strategy.light_choice,
+            time_traces: self.time_traces,
+            guide_pdf_scale: self.guide_pdf_scale,
+        }
+    }
+
     /// The built-in defaults with the scene's `[render]` section over them (flags go on top).
     pub fn for_scene(scene: &Scene) -> Self {
         let base = RenderSettings::default();
@@ -722,15 +735,7 @@ fn render_with<S: Sampler>(
     progress: &dyn Progress,
 ) -> (RenderStats, bool, Vec<Record>) {
     let start = Instant::now();
-    let integrator = IntegratorSettings {
-        max_depth: settings.max_depth,
-        directions: settings.strategy.directions,
-        lights: settings.strategy.lights,
-        light_points: settings.strategy.light_points,
-        light_choice: settings.strategy.light_choice,
-        time_traces: settings.time_traces,
-        guide_pdf_scale: settings.guide_pdf_scale,
-    };
+    let integrator = settings.integrator();
     let tiles_x = settings.width.div_ceil(TILE);
     let tiles: Vec<TileResult> = tiles
         .into_par_iter()

@@ -183,14 +183,12 @@ pub fn run(req: &GuideRequest) -> Result<GuideOutcome> {
             dtree.pdf_canonical(canonical(i, j)) as f64
         })
         .collect();
+    // the incident radiance: paths one segment shorter than the render's, Phong directions, MIS
     let integrator = IntegratorSettings {
         max_depth: settings.max_depth.saturating_sub(1).max(1),
         directions: Directions::Phong,
         lights: crate::lights::LightStrategy::Mis,
-        light_points: settings.strategy.light_points,
-        light_choice: settings.strategy.light_choice,
-        time_traces: false,
-        guide_pdf_scale: 1.0,
+        ..settings.integrator()
     };
     let origin = s.p + n * scene.ray_epsilon;
     let brute = |scene: &Scene| -> Vec<f64> {
