@@ -122,6 +122,8 @@ pub struct RenderArgs {
     pub threads: Option<u32>,
     #[command(flatten)]
     pub strategy: StrategyArgs,
+    #[command(flatten)]
+    pub error: render::ErrorArgs,
     /// Exposure of the PNG, in stops (pixels × 2^EXPOSURE before tone mapping).
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     pub exposure: f32,
@@ -352,6 +354,7 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode> {
         variance: args.variance.clone(),
         time_traces: args.stats,
         stop: Some(&crate::STOP),
+        error: args.error.clone(),
     }
     .prepare()?;
     warn(&job.scene.warnings);

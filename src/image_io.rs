@@ -52,6 +52,9 @@ pub struct RgbImage {
     /// It differs from the metadata's spp where non-finite samples were dropped (and, with
     /// adaptive sampling, from pixel to pixel): merges weigh pixels by it.
     pub samples: Option<Vec<u32>>,
+    /// The estimated variance of each pixel's mean from randomized replicates (see
+    /// `vrpt::estimate`), when the file has `estimated_variance.R/G/B` channels.
+    pub estimated_variance: Option<Vec<Vec3>>,
     /// vrpt's metadata (keys without the `vrpt.` prefix).
     pub metadata: BTreeMap<String, String>,
 }
@@ -130,8 +133,17 @@ pub fn write_atomically(
     result
 }
 
+/// The channels of the per-sample variance of the mean.
+const VARIANCE_CHANNELS: [&str; 3] = ["variance.R", "variance.G", "variance.B"];
+/// The channels of the replicates' estimated variance of the mean.
+const ESTIMATE_CHANNELS: [&str; 3] = [
+    "estimated_variance.R",
+    "estimated_variance.G",
+    "estimated_variance.B",
+];
+
 /// Write `image` as a linear RGB f32 EXR: channels `R`, `G`, `B`, and where the image has them
-/// `variance.R/G/B` (f32) and `samples` (u32), with its metadata stored as string attributes
+/// `variance.R/G/B` and `estimated_variance.R/G/B` (f32) and `samples` (u32), with its metadata stored as string attributes
 /// named `vrpt.KEY`. Through a temporary file (see [`write_atomically`]).
 pub fn write_exr(path: &Path, image: &RgbImage) -> Result<()> {
     use exr_prelude::{AnyChannel, AnyChannels, Encoding, FlatSamples, Layer, LayerAttributes};
@@ -143,13 +155,15 @@ pub fn write_exr(path: &Path, image: &RgbImage) -> Result<()> {
     for (c, name) in ["R", "G", "B"].into_iter().enumerate() {
         list.push(f32s(name, plane(&image.pixels, c)));
     }
-    if let Some(var) = &image.variance {
-        assert_eq!(var.len(), n);
-        for (c, name) in ["variance.R", "variance.G", "variance.B"]
-            .into_iter()
-            .enumerate()
-        {
-            list.push(f32s(name, plane(var, c)));
+    for (var, names) in [
+        (&image.variance, VARIANCE_CHANNELS),
+        (&image.estimated_variance, ESTIMATE_CHANNELS),
+    ] {
+        if let Some(var) = var {
+            assert_eq!(var.len(), n);
+            for (c, name) in names.into_iter().enumerate() {
+                list.push(f32s(name, plane(var, c)));
+            }
         }
     }
     if let Some(samples) = &image.samples {
@@ -329,22 +343,27 @@ pub fn read_exr(path: &Path) -> Result<RgbImage> {
         let (x, y) = at(i);
         return Err(err(format!("pixel ({x}, {y}) is not a finite colour")));
     }
-    let variance_names = ["variance.R", "variance.G", "variance.B"];
-    let variance = rgb_of(variance_names);
-    if variance.is_none() && variance_names.iter().any(|n| find(n).is_some()) {
-        return Err(err(
-            "has some of the channels variance.R, variance.G, variance.B but not all".into(),
-        ));
-    }
-    if let Some(i) = variance.as_ref().and_then(|v| {
-        v.iter()
-            .position(|p| !(p.is_finite() && p.min_element() >= 0.0))
-    }) {
-        let (x, y) = at(i);
-        return Err(err(format!(
-            "the variance of pixel ({x}, {y}) is not a finite non-negative number"
-        )));
-    }
+    let variances = |names: [&str; 3], what: &str| -> Result<Option<Vec<Vec3>>> {
+        let v = rgb_of(names);
+        if v.is_none() && names.iter().any(|n| find(n).is_some()) {
+            return Err(err(format!(
+                "has some of the channels {} but not all",
+                names.join(", ")
+            )));
+        }
+        if let Some(i) = v.as_ref().and_then(|v| {
+            v.iter()
+                .position(|p| !(p.is_finite() && p.min_element() >= 0.0))
+        }) {
+            let (x, y) = at(i);
+            return Err(err(format!(
+                "the {what} of pixel ({x}, {y}) is not a finite non-negative number"
+            )));
+        }
+        Ok(v)
+    };
+    let variance = variances(VARIANCE_CHANNELS, "variance")?;
+    let estimated_variance = variances(ESTIMATE_CHANNELS, "estimated variance")?;
     let samples = match find("samples") {
         None => None,
         Some(FlatSamples::U32(v)) => Some(v.clone()),
@@ -368,6 +387,7 @@ pub fn read_exr(path: &Path) -> Result<RgbImage> {
         pixels,
         variance,
         samples,
+        estimated_variance,
         metadata,
     })
 }

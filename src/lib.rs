@@ -67,6 +67,7 @@ pub mod bsdf;
 pub mod camera;
 pub mod commands;
 pub mod error;
+pub mod estimate;
 pub mod film;
 pub mod guiding;
 pub mod image_io;

@@ -7,6 +7,7 @@
 //! `merge`, `diff`, `compare` and `converge` never index pixels by a claimed size.
 
 use crate::error::{Error, Result};
+use crate::estimate::ErrorEstimate;
 use crate::film::Film;
 use crate::image_io::{write_exr, write_png, Format, RgbImage};
 use crate::lights::{LightChoice, LightPoints, LightStrategy};
@@ -57,6 +58,37 @@ pub struct RenderMetadata {
     pub interrupted: bool,
     /// What path guiding's training did (guided renders; a merge keeps its first input's).
     pub guide: Option<GuideRecord>,
+    /// The image's estimated error (keys `replicates`, `error_estimate`, `estimated_mse`,
+    /// `estimated_rel_mse`); `None` for images made before vrpt estimated it.
+    pub estimate: Option<EstimateRecord>,
+    /// An adaptive render's rounds (key `adaptive_rounds`; `adaptive` is then `true`).
+    pub adaptive_rounds: Option<u32>,
+    /// The `--target-error` the render ran under (key `target_error`).
+    pub target_error: Option<f64>,
+}
+
+/// An image's estimated error, as the metadata records it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EstimateRecord {
+    /// The replicates rendered (1: one set per pass).
+    pub replicates: u32,
+    /// `replicates` (from their spread) or `per-sample` (s²/n).
+    pub method: String,
+    /// Estimated MSE and relMSE of the image against the true one.
+    pub mse: f64,
+    pub rel_mse: f64,
+}
+
+impl EstimateRecord {
+    /// The record of `e`, for a render of `replicates` replicates.
+    pub fn new(replicates: u32, e: &ErrorEstimate) -> Self {
+        EstimateRecord {
+            replicates,
+            method: e.method.name().into(),
+            mse: e.mse,
+            rel_mse: e.rel_mse,
+        }
+    }
 }
 
 /// The training of a guided render, as the metadata records it (keys `guide_*`).
@@ -106,6 +138,9 @@ impl RenderMetadata {
                 quad_nodes: g.tree.quad_nodes as u64,
                 bytes: g.tree.bytes as u64,
             }),
+            estimate: None,
+            adaptive_rounds: None,
+            target_error: None,
         }
     }
 
@@ -184,6 +219,19 @@ impl RenderMetadata {
             put("guide_leaves", g.leaves.to_string());
             put("guide_quad_nodes", g.quad_nodes.to_string());
             put("guide_bytes", g.bytes.to_string());
+        }
+        if let Some(e) = &self.estimate {
+            put("replicates", e.replicates.to_string());
+            put("error_estimate", e.method.clone());
+            put("estimated_mse", format!("{:e}", e.mse));
+            put("estimated_rel_mse", format!("{:e}", e.rel_mse));
+        }
+        if let Some(r) = self.adaptive_rounds {
+            put("adaptive", "true".into());
+            put("adaptive_rounds", r.to_string());
+        }
+        if let Some(t) = self.target_error {
+            put("target_error", format!("{t:e}"));
         }
         m
     }
@@ -314,6 +362,27 @@ impl RenderMetadata {
                     })
                 }
             },
+            estimate: match opt::<u32>(a, "replicates")? {
+                None => None,
+                Some(replicates) => {
+                    let err = |k: &str| -> std::result::Result<f64, String> {
+                        let v: f64 = num(k, req(a, k)?)?;
+                        if v.is_finite() && v >= 0.0 {
+                            Ok(v)
+                        } else {
+                            Err(format!("metadata '{k}' must be a finite error"))
+                        }
+                    };
+                    Some(EstimateRecord {
+                        replicates,
+                        method: req(a, "error_estimate")?.to_string(),
+                        mse: err("estimated_mse")?,
+                        rel_mse: err("estimated_rel_mse")?,
+                    })
+                }
+            },
+            adaptive_rounds: opt(a, "adaptive_rounds")?,
+            target_error: opt(a, "target_error")?,
         })
     }
 
@@ -363,7 +432,7 @@ impl RenderMetadata {
     /// let settings = RenderSettings { width: 8, height: 8, spp: 4, seed: 7, ..Default::default() };
     /// let (film, stats) = render(&scene, &settings, &NoProgress)?;
     /// let path = std::env::temp_dir().join("vrpt-doc-metadata.exr");
-    /// write_render(&path, &film, &RenderMetadata::new(&scene, &settings, &stats), 0.0, None)?;
+    /// write_render(&path, (&film, None), &RenderMetadata::new(&scene, &settings, &stats), 0.0, None)?;
     /// // read it back: the pixels, their variance and sample counts, and what made them
     /// let image = vrpt::image_io::read_exr(&path)?;
     /// let meta = RenderMetadata::require(&image, &path)?;
@@ -409,21 +478,26 @@ pub fn render_image(film: &Film, meta: &RenderMetadata) -> RgbImage {
         pixels: film.mean_image(),
         variance: Some(film.variance_image()),
         samples: Some(film.sample_counts()),
+        estimated_variance: None,
         metadata: meta.to_attributes(),
     }
 }
 
-/// Write a render: `output` as EXR (mean, variance of the mean, sample counts, metadata) or PNG
-/// (tone-mapped with `exposure` stops); and, if asked, the variance of the mean alone to the EXR
-/// `variance`. Every file is written to a temporary file and renamed.
+/// Write a render: `output` as EXR (mean, variance of the mean, sample counts, the estimated
+/// variance of the mean when `estimate` is given, metadata) or PNG (tone-mapped with `exposure`
+/// stops); and, if asked, the variance of the mean alone to the EXR `variance`. Every file is
+/// written to a temporary file and renamed.
 pub fn write_render(
     output: &Path,
-    film: &Film,
+    (film, estimate): (&Film, Option<&ErrorEstimate>),
     meta: &RenderMetadata,
     exposure: f32,
     variance: Option<&Path>,
 ) -> Result<()> {
-    let image = render_image(film, meta);
+    let image = RgbImage {
+        estimated_variance: estimate.map(|e| e.variance.clone()),
+        ..render_image(film, meta)
+    };
     match Format::from_path(output)? {
         Format::Exr => write_exr(output, &image)?,
         Format::Png => write_png(output, film.width, film.height, &image.pixels, exposure)?,
@@ -436,6 +510,7 @@ pub fn write_render(
         let var = RgbImage {
             pixels: image.variance.clone().expect("a render's variance"),
             variance: None,
+            estimated_variance: None,
             metadata: vmeta.to_attributes(),
             ..image
         };
@@ -480,6 +555,14 @@ mod tests {
                 quad_nodes: 3000,
                 bytes: 123456,
             }),
+            estimate: Some(EstimateRecord {
+                replicates: 4,
+                method: "replicates".into(),
+                mse: 1.5e-4,
+                rel_mse: 2.25e-3,
+            }),
+            adaptive_rounds: Some(6),
+            target_error: Some(1e-3),
         };
         let a = m.to_attributes();
         assert_eq!(a["strategy"], "importance");

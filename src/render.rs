@@ -12,6 +12,7 @@ use crate::accel::TraceStack;
 use crate::bsdf::Directions;
 use crate::camera::Camera;
 use crate::error::{Error, Result};
+use crate::estimate::{self, ErrorEstimate, Replicates};
 use crate::film::Film;
 use crate::guiding::{Record, SdTree, TreeSize};
 use crate::integrator::{radiance_guided, IntegratorSettings, RayCounts};
@@ -56,7 +57,14 @@ pub struct RenderSettings {
     /// Factor on the guided pdf (1): for the tests that show a wrong pdf is caught.
     #[doc(hidden)]
     pub guide_pdf_scale: f32,
+    /// Independent randomizations of every pixel (seeds [`replicate_seed`]), whose spread
+    /// estimates the image's error ([`crate::estimate`]); 1 renders one set per pass, and the
+    /// error is then estimated per sample. `vrpt render` defaults to [`DEFAULT_REPLICATES`].
+    pub replicates: u32,
 }
+
+/// The replicates of `vrpt render` when `--replicates` is not given.
+pub const DEFAULT_REPLICATES: u32 = 4;
 
 impl Default for RenderSettings {
     fn default() -> Self {
@@ -71,6 +79,7 @@ impl Default for RenderSettings {
             threads: None,
             time_traces: false,
             guide_pdf_scale: 1.0,
+            replicates: 1,
         }
     }
 }
@@ -338,36 +347,6 @@ fn sobol(seed: u64, _: SamplePass) -> SobolSampler {
     SobolSampler::new(seed)
 }
 
-/// Render the samples `range` (sample indices, all within `pass` and below
-/// [`SAMPLE_INDICES`]) of the tiles `tiles` (row-major tile indices) into `film`, going on from
-/// the sums it holds, on the current rayon pool, with the sampler `factory` makes for the pass.
-/// With `stop`, a tile reads the flag before each pixel (and every 256 samples of one) and ends
-/// there when it is set: the second value says whether some pixel was left out (the film then
-/// holds a partial batch, for the caller to drop).
-#[allow(clippy::too_many_arguments)]
-fn render_range<F: SamplerFactory>(
-    scene: &Scene,
-    camera: &Camera,
-    settings: &RenderSettings,
-    factory: &F,
-    (pass, range, tiles, stop): (SamplePass, Range<u64>, Range<u32>, Option<&AtomicBool>),
-    guide: Guide,
-    film: &mut Film,
-    progress: &dyn Progress,
-) -> (RenderStats, bool, Vec<Record>) {
-    let sampler = factory.make(settings.seed, pass);
-    render_with(
-        scene,
-        camera,
-        settings,
-        sampler,
-        (range, tiles, stop),
-        guide,
-        film,
-        progress,
-    )
-}
-
 /// The guide a render samples with, and whether it records for the next one.
 #[derive(Clone, Copy)]
 struct Guide<'a> {
@@ -388,6 +367,12 @@ pub struct PassPlan {
     /// A flag that, once set (by a signal handler), stops the render after the current batch
     /// of samples; the render is then cut into batches of about [`BATCH_SECONDS`].
     pub stop: Option<&'static AtomicBool>,
+    /// Adaptive sampling: rounds whose samples go where the estimated relative error is
+    /// ([`crate::estimate`]); needs at least 2 replicates, and no shard.
+    pub adaptive: bool,
+    /// Stop after the first pass (a whole round of the replicates) after which the image's
+    /// estimated relMSE is at most this.
+    pub target_error: Option<f64>,
 }
 
 /// Wall time the samples that a stopped render takes after the stop aim at (see
@@ -425,6 +410,10 @@ pub struct Rendered {
     pub spp: u32,
     /// Whether the stop flag ended the render before all its samples.
     pub interrupted: bool,
+    /// The image's estimated error.
+    pub estimate: ErrorEstimate,
+    /// The rounds of an adaptive render (`None`: every pixel took the same samples).
+    pub rounds: Option<u32>,
 }
 
 /// The pass that holds sample `done` (relative to the render's first sample) of a render of
@@ -488,74 +477,176 @@ pub fn render_passes_with<F: SamplerFactory>(
     progress: &dyn Progress,
 ) -> Result<Rendered> {
     let camera = camera_for(scene, settings)?;
-    let spp = settings.spp as u64;
-    let pass = plan.pass_spp.map_or(spp, |p| p as u64).clamp(1, spp.max(1));
-    let range = match plan.shard {
-        Some(s) => {
-            let r = shard_range(settings.spp, s)?;
-            r.start as u64..r.end as u64
+    if settings.replicates == 0 {
+        return Err(Error::Settings("--replicates must be at least 1".into()));
+    }
+    if plan.adaptive && settings.replicates < 2 {
+        return Err(Error::Settings(
+            "--adaptive needs at least 2 replicates: it allocates from their spread".into(),
+        ));
+    }
+    if plan.adaptive && plan.shard.is_some() {
+        return Err(Error::Settings(
+            "--adaptive cannot render a shard: each round's allocation depends on every sample \
+             before it"
+                .into(),
+        ));
+    }
+    if let Some(e) = plan.target_error {
+        if !(e > 0.0 && e.is_finite()) {
+            return Err(Error::Settings(format!(
+                "--target-error {e}: the target relMSE must be a positive number"
+            )));
         }
-        None => 0..spp,
-    };
-    let first = settings.first_sample as u64;
-    let stopped = || plan.stop.is_some_and(|f| f.load(Ordering::Relaxed));
-    let all = 0..tile_count(settings);
-    let pixels = settings.width as f64 * settings.height as f64;
+    }
     let start = Instant::now();
     with_threads(settings.threads, || {
-        let mut film = Film::new(settings.width, settings.height);
         let mut stats = RenderStats::default();
         let tree = (settings.strategy.directions == Directions::Guided)
             .then(|| train_guide((scene, &camera, settings, plan), factory, start, &mut stats));
         let training = start.elapsed();
+        let job = Job {
+            scene,
+            camera: &camera,
+            settings,
+            plan,
+            factory,
+            guide: Guide {
+                tree: tree.as_ref(),
+                record: false,
+            },
+            progress,
+            start,
+        };
+        let mut r = if plan.adaptive {
+            job.adaptive(&mut stats)?
+        } else {
+            job.uniform(&mut stats)?
+        };
+        stats.elapsed = start.elapsed();
+        if let (Some(t), Some(g)) = (&tree, &mut stats.guide) {
+            g.final_time = stats.elapsed - training;
+            g.tree = t.size();
+        }
+        r.stats = stats;
+        Ok(r)
+    })?
+}
+
+/// The seed of replicate `r` of a render with seed `seed`: the seed itself for replicate 0 (a
+/// render of one replicate is the render it always was), a hash of both for the others.
+pub fn replicate_seed(seed: u64, r: u32) -> u64 {
+    match r {
+        0 => seed,
+        _ => crate::math::mix64(seed ^ (r as u64).wrapping_mul(0xd1b5_4a32_d192_ed03)),
+    }
+}
+
+/// What every pass of a render shares.
+struct Job<'a, F: SamplerFactory> {
+    scene: &'a Scene,
+    camera: &'a Camera,
+    settings: &'a RenderSettings,
+    plan: &'a PassPlan,
+    factory: &'a F,
+    guide: Guide<'a>,
+    progress: &'a dyn Progress,
+    start: Instant,
+}
+
+impl<F: SamplerFactory> Job<'_, F> {
+    fn stopped(&self) -> bool {
+        self.plan.stop.is_some_and(|f| f.load(Ordering::Relaxed))
+    }
+
+    /// Render into `film` with replicate `rep`'s seed; add the counts to `stats`; (wall seconds
+    /// per pixel sample of the pixels completed, if any; whether the stop flag cut a tile).
+    fn batch(
+        &self,
+        rep: u32,
+        (set, range, stop, alloc): (SamplePass, Range<u64>, Option<&AtomicBool>, Option<Alloc>),
+        film: &mut Film,
+        stats: &mut RenderStats,
+    ) -> (Option<f64>, bool) {
+        let settings = RenderSettings {
+            seed: replicate_seed(self.settings.seed, rep),
+            ..self.settings.clone()
+        };
+        let (s, cut, _) = render_with(
+            self.scene,
+            self.camera,
+            &settings,
+            self.factory,
+            (set, range, 0..tile_count(self.settings), stop, alloc),
+            self.guide,
+            film,
+            self.progress,
+        );
+        stats.rays.add(&s.rays);
+        stats.samples += s.samples;
+        stats.nonfinite += s.nonfinite;
+        stats.thread_time += s.thread_time;
+        let rate = (s.samples > 0).then(|| s.elapsed.as_secs_f64() / s.samples as f64);
+        (rate, cut)
+    }
+
+    /// Every pixel the same samples, in passes; pass `k` belongs to replicate `k mod R` and
+    /// holds that replicate's sample indices `first + ⌊k/R⌋·P ..` (see [`render_passes`]).
+    fn uniform(&self, stats: &mut RenderStats) -> Result<Rendered> {
+        let (settings, plan) = (self.settings, self.plan);
+        let spp = settings.spp as u64;
+        let reps = settings.replicates as u64;
+        let pass = plan
+            .pass_spp
+            .map_or(spp.div_ceil(reps), |p| p as u64)
+            .clamp(1, spp.max(1));
+        let range = match plan.shard {
+            Some(s) => {
+                let r = shard_range(settings.spp, s)?;
+                r.start as u64..r.end as u64
+            }
+            None => 0..spp,
+        };
+        let first = settings.first_sample as u64;
+        let pixels = settings.width as f64 * settings.height as f64;
+        let mut film = Film::new(settings.width, settings.height);
+        let mut replicates = Replicates::new(settings.replicates, film.len());
         let mut done = range.start;
         let mut interrupted = false;
         while done < range.end {
             // every pass renders at least one sample per pixel (its end lies past `done`), so a
             // render stopped before its first batch still writes a sample per pixel
-            if done > range.start && stopped() {
+            if done > range.start && self.stopped() {
                 interrupted = true;
                 break;
             }
             let bounds = pass_bounds(done, pass, spp);
-            // a pass starts below spp ≤ 2³² − first: its origin is a sample index, its size
-            // at most spp
+            let k = bounds.start / pass;
+            let rep = (k % reps) as u32;
+            // the replicate's own sample indices: below first + spp ≤ 2³², so a u32
+            let origin = first + k / reps * pass;
             let set = SamplePass {
-                origin: (first + bounds.start) as u32,
+                origin: origin as u32,
                 size: (bounds.end - bounds.start) as u32,
             };
             let end = bounds.end.min(range.end);
-            // render samples done..done + n of every pixel into `film`; the stop flag is read
-            // before each pixel when `stop` is given; (wall seconds per pixel sample of the
-            // pixels completed, if any; whether it cut a tile short)
-            let mut batch = |n: u64, done: u64, stop: Option<&AtomicBool>, film: &mut Film| {
-                let r = first + done..first + done + n;
-                let (s, cut, _) = render_range(
-                    scene,
-                    &camera,
-                    settings,
-                    factory,
-                    (set, r, all.clone(), stop),
-                    Guide {
-                        tree: tree.as_ref(),
-                        record: false,
-                    },
-                    film,
-                    progress,
-                );
-                stats.rays.add(&s.rays);
-                stats.samples += s.samples;
-                stats.nonfinite += s.nonfinite;
-                stats.thread_time += s.thread_time;
-                let rate = (s.samples > 0).then(|| s.elapsed.as_secs_f64() / s.samples as f64);
-                (rate, cut)
-            };
+            let at = |done: u64| origin + done - bounds.start;
             let mut pass_film = Film::new(settings.width, settings.height);
             if plan.stop.is_none() {
-                batch(end - done, done, None, &mut pass_film);
+                self.batch(
+                    rep,
+                    (set, at(done)..at(end), None, None),
+                    &mut pass_film,
+                    stats,
+                );
                 done = end;
             } else {
-                let (rate, cut) = batch(end - done, done, plan.stop, &mut pass_film);
+                let (rate, cut) = self.batch(
+                    rep,
+                    (set, at(done)..at(end), plan.stop, None),
+                    &mut pass_film,
+                    stats,
+                );
                 if !cut {
                     done = end;
                 } else {
@@ -564,29 +655,175 @@ pub fn render_passes_with<F: SamplerFactory>(
                     let n = rate.map_or(1, |r| (BATCH_SECONDS / (r * pixels).max(1e-12)) as u64);
                     let n = n.clamp(1, end - done);
                     pass_film = Film::new(settings.width, settings.height);
-                    batch(n, done, None, &mut pass_film);
+                    self.batch(
+                        rep,
+                        (set, at(done)..at(done + n), None, None),
+                        &mut pass_film,
+                        stats,
+                    );
                     done += n;
                 }
-                interrupted = stopped() && done < range.end;
+                interrupted = self.stopped() && done < range.end;
             }
             film.merge(&pass_film).map_err(Error::Settings)?;
-            if interrupted || plan.time_limit.is_some_and(|t| start.elapsed() >= t) {
+            replicates.add_samples(rep, &pass_film);
+            if interrupted || plan.time_limit.is_some_and(|t| self.start.elapsed() >= t) {
                 break;
             }
+            // a target error is checked after every whole round of R passes
+            if let Some(target) = plan.target_error {
+                if done == bounds.end
+                    && (k + 1).is_multiple_of(reps)
+                    && ErrorEstimate::of(&replicates, &film).rel_mse <= target
+                {
+                    break;
+                }
+            }
         }
-        stats.elapsed = start.elapsed();
-        if let (Some(t), Some(g)) = (&tree, &mut stats.guide) {
-            g.final_time = stats.elapsed - training;
-            g.tree = t.size();
-        }
+        let estimate = ErrorEstimate::of(&replicates, &film);
         Ok(Rendered {
             film,
-            stats,
+            stats: RenderStats::default(),
             first_sample: (first + range.start) as u32,
             spp: (done - range.start) as u32,
             interrupted,
+            estimate,
+            rounds: None,
         })
-    })?
+    }
+
+    /// Adaptive rounds (see [`crate::estimate`]): round `j` gives pixel `i` the same
+    /// `n_j(i) ≥ 1` samples in every replicate, a fresh set at the replicate's next sample
+    /// indices, allocated from the rounds before; the image weighs round `j`'s means by its
+    /// planned spp. Rounds double from `max(1, spp/(16R))` spp per replicate (with a time limit
+    /// or a target error they stay at `⌈pass/R⌉`, `pass` = `--pass-spp`, default 16), and stop
+    /// at `spp` in all, the time limit (a whole round past it), the target error or the stop
+    /// flag (which drops the round under way).
+    fn adaptive(&self, stats: &mut RenderStats) -> Result<Rendered> {
+        let (settings, plan) = (self.settings, self.plan);
+        let (w, h) = (settings.width, settings.height);
+        let spp = settings.spp as u64;
+        let reps = settings.replicates;
+        let r64 = reps as u64;
+        let steady = plan.time_limit.is_some() || plan.target_error.is_some();
+        let first_round = match (plan.pass_spp, steady) {
+            (Some(p), _) => (p as u64).div_ceil(r64),
+            (None, true) => 16u64.div_ceil(r64),
+            (None, false) => (spp / (16 * r64)).max(1),
+        };
+        let first = settings.first_sample as u64;
+        let mut raw = Film::new(w, h);
+        let mut replicates = Replicates::new(reps, raw.len());
+        // each pixel's next sample index of every replicate (the same in all of them)
+        let mut next = vec![first; raw.len()];
+        let mut planned = 0u64; // spp per replicate planned so far
+        let mut rounds = 0u32;
+        let mut interrupted = false;
+        loop {
+            let size = if rounds == 0 || steady {
+                first_round
+            } else {
+                first_round << (rounds - 1).min(40)
+            };
+            // the last round fills the spp exactly; at least one round runs
+            let size = if rounds == 0 {
+                size.min((spp / r64).max(1))
+            } else {
+                size.min(spp / r64 - planned.min(spp / r64))
+            };
+            if size == 0 || (rounds > 0 && self.stopped()) {
+                interrupted = rounds > 0 && self.stopped() && size > 0;
+                break;
+            }
+            let counts: Vec<u32> = if rounds == 0 {
+                vec![size as u32; raw.len()]
+            } else {
+                let e = ErrorEstimate::of(&replicates, &raw);
+                let mean = raw.mean_image();
+                let n: Vec<u64> = (0..raw.len()).map(|i| raw.count(i)).collect();
+                estimate::allocate(w, h, &mean, &e.variance, &n, size as u32)
+            };
+            // keep every pixel's sample indices below 2³²
+            let counts: Vec<u32> = counts
+                .iter()
+                .zip(&next)
+                .map(|(&c, &o)| (c as u64).min(SAMPLE_INDICES - o).max(1) as u32)
+                .collect();
+            let alloc = Alloc {
+                origin: &next,
+                count: &counts,
+            };
+            let none = SamplePass { origin: 0, size: 1 };
+            let mut films = Vec::with_capacity(reps as usize);
+            let mut cut = false;
+            for rep in 0..reps {
+                let mut f = Film::new(w, h);
+                let (_, c) = self.batch(rep, (none, 0..0, plan.stop, Some(alloc)), &mut f, stats);
+                cut |= c;
+                if cut {
+                    break;
+                }
+                films.push(f);
+            }
+            if cut {
+                interrupted = rounds > 0;
+                if rounds > 0 {
+                    break;
+                }
+                // a round must finish for the image to hold anything: render the first one
+                // whole (a stop before any round ends costs one round)
+                films.clear();
+                for rep in 0..reps {
+                    let mut f = Film::new(w, h);
+                    self.batch(rep, (none, 0..0, None, Some(alloc)), &mut f, stats);
+                    films.push(f);
+                }
+                interrupted = true;
+            }
+            for (rep, f) in films.iter().enumerate() {
+                replicates.add_means(rep as u32, f, size as f64);
+                raw.merge(f).map_err(Error::Settings)?;
+            }
+            // a mean whose pixel sums are F·n: the film's mean is the weighted one
+            for (o, &c) in next.iter_mut().zip(&counts) {
+                *o += c as u64;
+            }
+            planned += size;
+            rounds += 1;
+            if interrupted || plan.time_limit.is_some_and(|t| self.start.elapsed() >= t) {
+                break;
+            }
+            if let Some(target) = plan.target_error {
+                let film = weighted(&raw, &replicates);
+                if ErrorEstimate::of(&replicates, &film).rel_mse <= target {
+                    break;
+                }
+            }
+        }
+        let film = weighted(&raw, &replicates);
+        let estimate = ErrorEstimate::of(&replicates, &film);
+        Ok(Rendered {
+            film,
+            stats: RenderStats::default(),
+            first_sample: first as u32,
+            spp: (planned * r64).min(u32::MAX as u64) as u32,
+            interrupted,
+            estimate,
+            rounds: Some(rounds),
+        })
+    }
+}
+
+/// `raw`'s samples with each pixel's sum rescaled to `F·n`, `F` the replicates' weighted mean:
+/// a film whose mean is an adaptive render's image (its per-sample variance is then about, not
+/// exactly, the samples').
+fn weighted(raw: &Film, replicates: &Replicates) -> Film {
+    let mut film = raw.clone();
+    for i in 0..film.len() {
+        let (_, s2, n) = raw.pixel_sums(i);
+        film.set_pixel_sums(i, replicates.mean(i) * n as f64, s2, n);
+    }
+    film
 }
 
 /// The training iterations of a guided render (see [`crate::guiding`]): iterations of 1, 2,
@@ -637,12 +874,12 @@ fn train_guide<F: SamplerFactory>(
         let mut first = 0;
         while first < tiles {
             let end = (first + chunk).min(tiles);
-            let (s, _, records) = render_range(
+            let (s, _, records) = render_with(
                 scene,
                 camera,
                 &iteration,
                 factory,
-                (set, 0..spp, first..end, None),
+                (set, 0..spp, first..end, None, None),
                 Guide {
                     tree: Some(&tree),
                     record: true,
@@ -723,19 +960,41 @@ fn tile_count(settings: &RenderSettings) -> u32 {
     settings.width.div_ceil(TILE) * settings.height.div_ceil(TILE)
 }
 
+/// Per-pixel sample sets of an adaptive round: pixel `i` renders the set of `count[i]` samples
+/// with sample indices `origin[i] ..` (row-major, whole image).
+#[derive(Clone, Copy)]
+struct Alloc<'a> {
+    origin: &'a [u64],
+    count: &'a [u32],
+}
+
+/// Render the samples `range` (sample indices, all within `pass` and below
+/// [`SAMPLE_INDICES`]) of the tiles `tiles` (row-major tile indices) into `film`, going on from
+/// the sums it holds, on the current rayon pool, with the sampler `factory` makes for the pass
+/// and `settings.seed`; with `alloc`, each pixel's own set instead of `pass` and `range`.
+/// With `stop`, a tile reads the flag before each pixel (and every 256 samples of one) and ends
+/// there when it is set: the second value says whether some pixel was left out (the film then
+/// holds a partial batch, for the caller to drop).
 #[allow(clippy::too_many_arguments)]
-fn render_with<S: Sampler>(
+fn render_with<F: SamplerFactory>(
     scene: &Scene,
     camera: &Camera,
     settings: &RenderSettings,
-    sampler: S,
-    (range, tiles, stop): (Range<u64>, Range<u32>, Option<&AtomicBool>),
+    factory: &F,
+    (pass, range, tiles, stop, alloc): (
+        SamplePass,
+        Range<u64>,
+        Range<u32>,
+        Option<&AtomicBool>,
+        Option<Alloc>,
+    ),
     guide: Guide,
     film: &mut Film,
     progress: &dyn Progress,
 ) -> (RenderStats, bool, Vec<Record>) {
     let start = Instant::now();
     let integrator = settings.integrator();
+    let sampler = factory.make(settings.seed, pass);
     let tiles_x = settings.width.div_ceil(TILE);
     let tiles: Vec<TileResult> = tiles
         .into_par_iter()
@@ -765,7 +1024,19 @@ fn render_with<S: Sampler>(
                         break 'pixels;
                     }
                     let pixel = UVec2::new(x, y);
-                    let (mut sum, mut sum_sq, mut n) = film.pixel_sums(film.index(x, y));
+                    let i = film.index(x, y);
+                    let (mut sum, mut sum_sq, mut n) = film.pixel_sums(i);
+                    let range = match alloc {
+                        None => range.clone(),
+                        Some(a) => {
+                            let set = SamplePass {
+                                origin: a.origin[i] as u32,
+                                size: a.count[i],
+                            };
+                            *sampler = factory.make(settings.seed, set);
+                            a.origin[i]..a.origin[i] + a.count[i] as u64
+                        }
+                    };
                     for index in range.clone() {
                         // a long pixel reads the flag too (every 256 samples: a relaxed load)
                         if index % 256 == 255 && stop.is_some_and(|f| f.load(Ordering::Relaxed)) {
@@ -798,7 +1069,7 @@ fn render_with<S: Sampler>(
                     tile.sums.push((sum, sum_sq, n));
                 }
             }
-            progress.advance(tile.sums.len() as u64 * (range.end - range.start));
+            progress.advance(tile.samples);
             tile.time = tile_start.elapsed();
             tile
         })

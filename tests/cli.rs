@@ -558,3 +558,99 @@ fn time_limited_guided_render_trains_inside_the_limit() {
         m.render_seconds
     );
 }
+
+#[test]
+fn renders_state_their_error_and_adapt_on_request() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = common::cornell_path();
+    let s = scene.to_str().unwrap();
+    let exr = dir.path().join("a.exr");
+    let map = dir.path().join("spp.png");
+    let out = vrpt(&[
+        "render",
+        s,
+        "--width",
+        "24",
+        "--height",
+        "24",
+        "--spp",
+        "64",
+        "--adaptive",
+        "--spp-map",
+        map.to_str().unwrap(),
+        "-o",
+        exr.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(
+        err.contains("estimated error: relMSE") && err.contains("from 4 replicates"),
+        "{err}"
+    );
+    assert!(
+        err.contains("adaptive: ") && err.contains("rounds"),
+        "{err}"
+    );
+    assert!(map.is_file());
+    let img = vrpt::image_io::read_exr(&exr).unwrap();
+    let meta = vrpt::output::RenderMetadata::require(&img, &exr).unwrap();
+    assert!(img.metadata.contains_key("estimated_rel_mse"));
+    let e = meta.estimate.expect("an estimate");
+    assert_eq!((e.replicates, e.method.as_str()), (4, "replicates"));
+    assert!(meta.adaptive_rounds.is_some_and(|n| n >= 3));
+    assert!(img.estimated_variance.is_some());
+    let counts = img.samples.unwrap();
+    assert!(
+        counts.iter().min() < counts.iter().max(),
+        "adaptive spp should vary"
+    );
+    // diff prints the image's estimate beside the measured error; adaptive renders do not merge
+    let out = vrpt(&["diff", exr.to_str().unwrap(), exr.to_str().unwrap()]);
+    assert!(String::from_utf8_lossy(&out.stdout).contains("estimated relMSE"));
+    let m = dir.path().join("m.exr");
+    let out = vrpt(&[
+        "merge",
+        exr.to_str().unwrap(),
+        exr.to_str().unwrap(),
+        "-o",
+        m.to_str().unwrap(),
+    ]);
+    assert_one_line_error(&out, "merge adaptive", "adaptive");
+    // one replicate falls back to the per-sample estimate and says so
+    let out = vrpt(&[
+        "render",
+        s,
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "--replicates",
+        "1",
+        "-o",
+        exr.to_str().unwrap(),
+    ]);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("per sample"));
+    for (args, expect) in [
+        (
+            vec!["--adaptive", "--replicates", "1"],
+            "at least 2 replicates",
+        ),
+        (vec!["--target-error", "0"], "not a positive relMSE"),
+        (vec!["--target-error", "x"], "not a positive relMSE"),
+        (vec!["--replicates", "0"], "--replicates"),
+        (vec!["--spp-map", "a.exr"], "spp map"),
+    ] {
+        let mut a = vec![
+            "render",
+            s,
+            "--width",
+            "8",
+            "--height",
+            "8",
+            "-o",
+            exr.to_str().unwrap(),
+        ];
+        a.extend(args.iter());
+        assert_one_line_error(&vrpt(&a), &args.join(" "), expect);
+    }
+}

@@ -173,7 +173,8 @@ fn check_in_browser(report: &Path, expect: &Value, kind: &str) {
     assert!(passed >= 50, "only {passed} checks ran");
 }
 
-/// Render the shipped Cornell box at 48×48 to `out` (an EXR) and read it back.
+/// Render the shipped Cornell box at 48×48 to `out` (an EXR) and read it back: one replicate,
+/// as compare and converge render each run (they measure the error across runs).
 fn render(spp: u32, seed: u64, strategy: &str, out: &Path) -> RgbImage {
     let scene = common::cornell_path();
     let (spp, seed) = (spp.to_string(), seed.to_string());
@@ -190,6 +191,8 @@ fn render(spp: u32, seed: u64, strategy: &str, out: &Path) -> RgbImage {
         &seed,
         "--strategy",
         strategy,
+        "--replicates",
+        "1",
         "-q",
         "-o",
         out.to_str().unwrap(),

@@ -58,4 +58,11 @@ $vrpt converge scenes/door --reference "$work/door-ref.exr" --runs 2 -q \
     --strategies stratified+phong+mis,stratified+guided+mis \
     --spp 16,64,256,1024 --plot "$out/door-converge.png" >/dev/null
 
+# Error estimates (README "How good is this image"): the calibration plot, and where an adaptive
+# render of glossy-plates spends its samples.
+cargo run --release -q --example calibration -- --size 64 48 --spp 64 --ref-spp 8192 --seeds 3 \
+    --plot "$out/calibration.png" >/dev/null
+$vrpt render scenes/glossy-plates --width 128 --height 96 --spp 256 --seed 1 --adaptive -q \
+    -o "$work/gp-adaptive.png" --spp-map "$out/glossy-plates-spp-map.png"
+
 ls -l "$out"/*.png

@@ -440,6 +440,7 @@ fn run_settings(st: &Strategy, s: &ExperimentSettings, spp: u32, seed: u64) -> R
         threads: None,
         time_traces: false,
         guide_pdf_scale: 1.0,
+        replicates: 1,
     }
 }
 

@@ -6,10 +6,16 @@
 //! of its mean `vᵢ`, the sums of squares are recovered exactly, `Σx² = vᵢ nᵢ (nᵢ − 1) + nᵢ mᵢ²`,
 //! and the merged variance of the mean is `(Σx² − N M²) / (N (N − 1))`. This equals one render of
 //! all the samples (one film holding every input's sums), up to f32 storage rounding.
+//!
+//! Where every input carries an estimated variance from replicates (`estimated_variance.*`),
+//! the merge's is `Σ (nᵢ/N)² vᵢ`, the variance of a weighted mean of independent means (its
+//! metadata says `error_estimate = merged`): exact for renders of different seeds, and only
+//! about right for shards of one render, whose replicates are split between them. Adaptive
+//! renders do not merge: their pixels weigh rounds, not samples.
 
 use crate::error::{Error, Result};
 use crate::image_io::RgbImage;
-use crate::output::RenderMetadata;
+use crate::output::{EstimateRecord, RenderMetadata};
 use glam::{DVec3, Vec3};
 use std::path::PathBuf;
 
@@ -82,6 +88,13 @@ pub fn merge(inputs: &[MergeInput]) -> Result<(RgbImage, RenderMetadata)> {
                 ),
             ));
         }
+        if m.adaptive_rounds.is_some() {
+            return Err(bad(
+                i,
+                "is an adaptive render: its pixels weigh rounds, not samples, so it does not merge"
+                    .into(),
+            ));
+        }
         let Some(seed) = m.seed else {
             return Err(bad(
                 i,
@@ -113,6 +126,9 @@ pub fn merge(inputs: &[MergeInput]) -> Result<(RgbImage, RenderMetadata)> {
     };
     let mut pixels = vec![Vec3::ZERO; px];
     let mut variance = with_var.then(|| vec![Vec3::ZERO; px]);
+    // the inputs' estimated variances combine as those of independent means, Σ (nᵢ/N)² vᵢ
+    let with_estimate = inputs.iter().all(|i| i.image.estimated_variance.is_some());
+    let mut estimated = with_estimate.then(|| vec![Vec3::ZERO; px]);
     let mut samples = vec![0u32; px];
     for p in 0..px {
         let (mut sum, mut sum_sq, mut nt) = (DVec3::ZERO, DVec3::ZERO, 0u64);
@@ -133,6 +149,15 @@ pub fn merge(inputs: &[MergeInput]) -> Result<(RgbImage, RenderMetadata)> {
         let n = nt as f64;
         let mean = if nt > 0 { sum / n } else { DVec3::ZERO };
         pixels[p] = mean.as_vec3();
+        if let Some(est) = &mut estimated {
+            let mut e = DVec3::ZERO;
+            for input in inputs {
+                let w = count(input, p) as f64 / n.max(1.0);
+                let v = input.image.estimated_variance.as_ref().expect("checked")[p];
+                e += w * w * v.as_dvec3();
+            }
+            est[p] = e.as_vec3();
+        }
         if let Some(var) = &mut variance {
             var[p] = if nt > 1 {
                 ((sum_sq - mean * mean * n) / (n * (n - 1.0)))
@@ -164,6 +189,19 @@ pub fn merge(inputs: &[MergeInput]) -> Result<(RgbImage, RenderMetadata)> {
         shard: None,
         requested_spp: None,
         interrupted: inputs.iter().any(|i| i.meta.interrupted),
+        estimate: estimated.as_ref().map(|v| {
+            let (mse, rel_mse) = crate::estimate::image_error(first.width, &pixels, v);
+            EstimateRecord {
+                replicates: inputs
+                    .iter()
+                    .map(|i| i.meta.estimate.as_ref().map_or(1, |e| e.replicates))
+                    .sum(),
+                method: "merged".into(),
+                mse,
+                rel_mse,
+            }
+        }),
+        target_error: None,
         ..first.clone()
     };
     let image = RgbImage {
@@ -172,6 +210,7 @@ pub fn merge(inputs: &[MergeInput]) -> Result<(RgbImage, RenderMetadata)> {
         pixels,
         variance,
         samples: Some(samples),
+        estimated_variance: estimated,
         metadata: meta.to_attributes(),
     };
     Ok((image, meta))

@@ -1,6 +1,7 @@
 //! Analysis: how much each technique reduces the error of an image. Knows nothing of how images
 //! are made beyond Films, EXR files and the renderer's public entry points.
 //!
+//! - [`calibration`]: an image's own error estimate against the error measured;
 //! - [`metrics`]: MSE, relMSE, RMSE, MAE, variance across runs, bias tests, error maps;
 //! - [`experiments`]: `compare` (strategies at equal spp or equal time, over K runs) and
 //!   `converge` (error against spp, each spp rendered from scratch, with fitted slopes);
@@ -11,6 +12,7 @@
 
 #![warn(missing_docs)]
 
+pub mod calibration;
 pub mod experiments;
 pub mod fit;
 pub mod merge;

@@ -106,6 +106,116 @@ fn draw_convergence<DB: DrawingBackend>(
     root.present().map_err(e)
 }
 
+/// Write the calibration plot of an error estimate as a PNG: estimated against measured MSE
+/// on log-log axes with the diagonal and the band of a factor 2 about it; `points` are the
+/// replicate estimates (labelled by series, e.g. "door sobol": one colour per label's first
+/// word), `per_sample` the per-sample estimates of the same images, in grey.
+pub fn write_calibration_plot(
+    path: &Path,
+    points: &[(f64, f64, String)],
+    per_sample: &[(f64, f64)],
+) -> Result<()> {
+    register_font();
+    Format::from_path(path)?;
+    let size = (900u32, 700u32);
+    let mut buf = vec![0u8; (size.0 * size.1 * 3) as usize];
+    draw_calibration(
+        BitMapBackend::with_buffer(&mut buf, size).into_drawing_area(),
+        points,
+        per_sample,
+    )
+    .map_err(|m| draw_err(path, m))?;
+    write_png_rgb8(path, size.0, size.1, &buf)
+}
+
+fn draw_calibration<DB: DrawingBackend>(
+    root: DrawingArea<DB, plotters::coord::Shift>,
+    points: &[(f64, f64, String)],
+    per_sample: &[(f64, f64)],
+) -> std::result::Result<(), String> {
+    let e = |x: plotters::drawing::DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
+    root.fill(&WHITE).map_err(e)?;
+    let all = points
+        .iter()
+        .flat_map(|p| [p.0, p.1])
+        .chain(per_sample.iter().flat_map(|p| [p.0, p.1]))
+        .filter(|v| *v > 0.0 && v.is_finite());
+    let (lo, hi) = all.fold((f64::MAX, f64::MIN), |(a, b), v| (a.min(v), b.max(v)));
+    let (lo, hi) = if lo < hi {
+        (lo / 2.0, hi * 2.0)
+    } else {
+        (1e-6, 1.0)
+    };
+    let mut chart = ChartBuilder::on(&root)
+        .caption("error estimate against measured error", (FONT, 20))
+        .margin(15)
+        .x_label_area_size(45)
+        .y_label_area_size(80)
+        .build_cartesian_2d((lo..hi).log_scale(), (lo..hi).log_scale())
+        .map_err(e)?;
+    chart
+        .configure_mesh()
+        .x_desc("MSE measured against the reference")
+        .y_desc("MSE the image estimates")
+        .label_style((FONT, 14))
+        .y_label_formatter(&|y| format!("{y:.0e}"))
+        .x_label_formatter(&|x| format!("{x:.0e}"))
+        .draw()
+        .map_err(e)?;
+    for (k, style) in [
+        (1.0, BLACK.stroke_width(2)),
+        (2.0, BLACK.mix(0.4).stroke_width(1)),
+    ] {
+        let lines: Vec<Vec<(f64, f64)>> = if k == 1.0 {
+            vec![vec![(lo, lo), (hi, hi)]]
+        } else {
+            vec![
+                vec![(lo, lo * k), (hi / k, hi)],
+                vec![(lo * k, lo), (hi, hi / k)],
+            ]
+        };
+        for l in lines {
+            chart.draw_series(LineSeries::new(l, style)).map_err(e)?;
+        }
+    }
+    chart
+        .draw_series(
+            per_sample
+                .iter()
+                .map(|&(x, y)| Cross::new((x, y), 4, BLACK.mix(0.35))),
+        )
+        .map_err(e)?
+        .label("per-sample estimate s²/n")
+        .legend(|(x, y)| Cross::new((x + 10, y), 4, BLACK.mix(0.35)));
+    let mut series: Vec<&str> = points
+        .iter()
+        .map(|p| p.2.split(' ').next().unwrap_or(""))
+        .collect();
+    series.dedup();
+    for (i, name) in series.iter().enumerate() {
+        let color = PALETTE[i % PALETTE.len()];
+        chart
+            .draw_series(
+                points
+                    .iter()
+                    .filter(|p| p.2.split(' ').next() == Some(name))
+                    .map(|p| Circle::new((p.0, p.1), 4, color.filled())),
+            )
+            .map_err(e)?
+            .label(format!("{name} (4 replicates)"))
+            .legend(move |(x, y)| Circle::new((x + 10, y), 4, color.filled()));
+    }
+    chart
+        .configure_series_labels()
+        .label_font((FONT, 14))
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::UpperLeft)
+        .draw()
+        .map_err(e)?;
+    root.present().map_err(e)
+}
+
 /// The log-log plot of MSE against spp as SVG text (for the HTML report).
 pub fn convergence_svg(c: &Convergence, title: &str) -> Result<String> {
     register_font();
@@ -160,6 +270,21 @@ pub fn write_error_map(path: &Path, image: &RgbImage, reference: &RgbImage) -> R
     let mut c = Canvas::new((w * scale).max(420), h * scale + BAR_H);
     c.blit(0, 0, w, h, scale, &|k| colours[k]);
     c.colour_bar(0, h * scale, lo, hi, ERROR_TITLE)?;
+    c.write(path)?;
+    Ok((lo, hi))
+}
+
+/// Write the samples of each pixel (`w × h`, row-major) as a false-colour PNG on a log scale,
+/// with its colour bar and range; returns the range. What an adaptive render spent where.
+pub fn write_spp_map(path: &Path, samples: &[u32], (w, h): (u32, u32)) -> Result<(f64, f64)> {
+    let map: Vec<f64> = samples.iter().map(|&n| n as f64).collect();
+    let lo = map.iter().copied().fold(f64::INFINITY, f64::min).max(1.0);
+    let hi = map.iter().copied().fold(0.0, f64::max).max(lo * 10.0);
+    let colours = false_colour(&map, lo, hi);
+    let scale = (256 / w.max(h)).max(1);
+    let mut c = Canvas::new((w * scale).max(420), h * scale + BAR_H);
+    c.blit(0, 0, w, h, scale, &|k| colours[k]);
+    c.colour_bar(0, h * scale, lo, hi, "samples per pixel, log scale")?;
     c.write(path)?;
     Ok((lo, hi))
 }

@@ -40,6 +40,11 @@ pub struct DiffOutcome {
     pub bias: Option<ImageBias>,
     /// Each region's metrics.
     pub regions: Vec<(String, Metrics)>,
+    /// The image's own estimate of its error (its `estimated_variance` channels), to set
+    /// beside the measured one: (how it was made, estimated MSE, estimated relMSE).
+    pub estimate: Option<(String, f64, f64)>,
+    /// The reference's mean variance of the mean (per sample): the floor under the MSE.
+    pub reference_variance: Option<f64>,
     pub written: Vec<Written>,
 }
 
@@ -100,6 +105,19 @@ pub fn run(req: &DiffRequest) -> Result<DiffOutcome> {
                 (reg.name.clone(), m)
             })
             .collect(),
+        estimate: a.estimated_variance.as_deref().map(|v| {
+            let (mse, rel) = crate::estimate::image_error(a.width, &a.pixels, v);
+            let how = RenderMetadata::radiance(&a, &req.image)
+                .ok()
+                .flatten()
+                .and_then(|m| m.estimate)
+                .map_or("replicates".into(), |e| match e.method.as_str() {
+                    "replicates" => format!("{} replicates", e.replicates),
+                    m => m.to_string(),
+                });
+            (how, mse, rel)
+        }),
+        reference_variance: r.variance.as_deref().map(mean_variance),
         written: Vec::new(),
     };
     if let Some(p) = &req.report {
@@ -131,6 +149,19 @@ impl DiffOutcome {
         );
         if let Some(v) = self.variance {
             t += &format!("variance of mean   {v:.6e}\n");
+        }
+        if let Some((how, mse, rel)) = &self.estimate {
+            t += &format!(
+                "estimated MSE      {mse:.6e} (the image's own estimate, {how}; measured/estimated {:.3})\n",
+                m.mse / mse
+            );
+            t += &format!(
+                "estimated relMSE   {rel:.6e} (measured/estimated {:.3})\n",
+                m.rel_mse / rel
+            );
+        }
+        if let Some(v) = self.reference_variance {
+            t += &format!("reference variance {v:.6e} (of its mean: the floor under the MSE)\n");
         }
         if let Some(b) = &self.bias {
             if let Some(z) = b.z {

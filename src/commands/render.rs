@@ -2,10 +2,13 @@
 //! `[render]` defaults over the built-in ones), in passes, a shard, under a time limit or a stop
 //! flag, and write the image (EXR with metadata, or PNG) and, if asked, the variance image.
 
+use crate::analysis::plots::write_spp_map;
 use crate::error::{Error, Result};
 use crate::image_io::{check_image_path, Format};
-use crate::output::{write_render, RenderMetadata};
-use crate::render::{render_passes, shard_range, PassPlan, Progress, RenderSettings, RenderStats};
+use crate::output::{write_render, EstimateRecord, RenderMetadata};
+use crate::render::{
+    render_passes, shard_range, PassPlan, Progress, RenderSettings, RenderStats, DEFAULT_REPLICATES,
+};
 use crate::scene::{self, Scene};
 use crate::strategy::Strategy;
 use std::ops::Range;
@@ -43,7 +46,43 @@ pub struct RenderRequest {
     pub time_traces: bool,
     /// A flag that stops the render after its current batch (set by a signal handler).
     pub stop: Option<&'static AtomicBool>,
+    /// Replicates, adaptive sampling, a target error and the spp map.
+    pub error: ErrorArgs,
 }
+
+/// How a render estimates its error, and whether it acts on it (`vrpt render`'s flags).
+#[derive(Clone, Debug, Default, clap::Args)]
+pub struct ErrorArgs {
+    /// Independent randomizations of every pixel, each a complete stratified or Sobol set of
+    /// spp/R samples; their spread estimates the image's error honestly for every sampler
+    /// (printed, and stored in an EXR as `estimated_variance.R/G/B` and `vrpt.estimated_rel_mse`).
+    /// 1: one set, the error then estimated per sample (s²/n, an overestimate for stratified
+    /// and Sobol points) [default: 4]
+    #[arg(long, value_name = "R", value_parser = clap::value_parser!(u32).range(1..=256))]
+    pub replicates: Option<u32>,
+    /// Adaptive sampling: rounds of samples sent where the estimated relative error is, the
+    /// image weighing each round by its planned size (unbiased); needs R ≥ 2.
+    #[arg(long, conflicts_with = "shard")]
+    pub adaptive: bool,
+    /// Stop after the first round whose estimated relMSE of the image is at most E (or at
+    /// --spp or --time-limit, whichever comes first; without --spp the cap is 65536 spp).
+    #[arg(long, value_name = "E", value_parser = parse_target)]
+    pub target_error: Option<f64>,
+    /// Also write the samples of each pixel as a false-colour PNG with its colour bar.
+    #[arg(long, value_name = "PNG")]
+    pub spp_map: Option<PathBuf>,
+}
+
+/// A target relMSE: a positive finite number.
+fn parse_target(s: &str) -> std::result::Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(x) if x > 0.0 && x.is_finite() => Ok(x),
+        _ => Err(format!("'{s}' is not a positive relMSE")),
+    }
+}
+
+/// The cap on spp of a `--target-error` render without `--spp`.
+pub const TARGET_ERROR_SPP_CAP: u32 = 65536;
 
 /// A render ready to run: the scene loaded, the settings and passes resolved, the outputs
 /// checked.
@@ -58,6 +97,7 @@ pub struct PreparedRender {
     pub samples: Range<u32>,
     exposure: f32,
     variance: Option<PathBuf>,
+    spp_map: Option<PathBuf>,
     time_limit: Option<f64>,
     shard: Option<(u32, u32)>,
 }
@@ -110,6 +150,14 @@ impl RenderRequest {
                 )));
             }
         }
+        if let Some(p) = &self.error.spp_map {
+            if check_image_path(p)? != Format::Png {
+                return Err(Error::Settings(format!(
+                    "--spp-map {}: the spp map is a .png",
+                    p.display()
+                )));
+            }
+        }
         let start = Instant::now();
         let scene = scene::load(&self.scene)?;
         let load_time = start.elapsed();
@@ -117,7 +165,11 @@ impl RenderRequest {
         let settings = RenderSettings {
             width: self.width.unwrap_or(d.width),
             height: self.height.unwrap_or(d.height),
-            spp: self.spp.unwrap_or(d.spp),
+            spp: match (self.spp, self.error.target_error) {
+                (Some(s), _) => s,
+                (None, Some(_)) => TARGET_ERROR_SPP_CAP,
+                (None, None) => d.spp,
+            },
             first_sample: self.first_sample,
             max_depth: self.max_depth.unwrap_or(d.max_depth),
             seed: self.seed,
@@ -125,14 +177,17 @@ impl RenderRequest {
             threads: self.threads,
             time_traces: self.time_traces,
             guide_pdf_scale: 1.0,
+            replicates: self.error.replicates.unwrap_or(DEFAULT_REPLICATES),
         };
         let plan = PassPlan {
-            pass_spp: self
-                .pass_spp
-                .or(self.time_limit.map(|_| 16.min(settings.spp))),
+            pass_spp: self.pass_spp.or((self.time_limit.is_some()
+                || self.error.target_error.is_some())
+            .then(|| 16.min(settings.spp))),
             time_limit: self.time_limit.map(Duration::from_secs_f64),
             shard: self.shard,
             stop: self.stop,
+            adaptive: self.error.adaptive,
+            target_error: self.error.target_error,
         };
         let samples = match self.shard {
             Some(s) => shard_range(settings.spp, s)?,
@@ -147,6 +202,7 @@ impl RenderRequest {
             samples,
             exposure: self.exposure,
             variance: self.variance.clone(),
+            spp_map: self.error.spp_map.clone(),
             time_limit: self.time_limit,
             shard: self.shard,
         })
@@ -191,6 +247,9 @@ impl PreparedRender {
             ..self.settings
         };
         let meta = RenderMetadata {
+            estimate: Some(EstimateRecord::new(self.settings.replicates, &r.estimate)),
+            adaptive_rounds: r.rounds,
+            target_error: self.plan.target_error,
             pass_spp: self.plan.pass_spp,
             time_limit_seconds: self.time_limit,
             shard: self.shard,
@@ -200,13 +259,24 @@ impl PreparedRender {
         };
         write_render(
             &self.output,
-            &r.film,
+            (&r.film, Some(&r.estimate)),
             &meta,
             self.exposure,
             self.variance.as_deref(),
         )?;
+        if let Some(p) = &self.spp_map {
+            write_spp_map(p, &r.film.sample_counts(), (r.film.width, r.film.height))?;
+        }
+        let adaptive = match r.rounds {
+            Some(n) => format!(
+                "adaptive: {n} rounds, {} to {} samples per pixel\n",
+                r.film.sample_counts().iter().min().copied().unwrap_or(0),
+                r.film.sample_counts().iter().max().copied().unwrap_or(0)
+            ),
+            None => String::new(),
+        };
         Ok(RenderOutcome {
-            summary: r.stats.summary(&self.scene, &settings),
+            summary: r.stats.summary(&self.scene, &settings) + &adaptive + &r.estimate.summary(),
             timing: r.stats.timing(self.load_time, self.scene.accel.build_time),
             output: self.output,
             settings,
