@@ -251,6 +251,16 @@ impl RenderMetadata {
                 .parse()
                 .map_err(|_| format!("metadata '{k}' is '{v}', not a valid number"))
         }
+        fn non_negative(a: &BTreeMap<String, String>, k: &str) -> std::result::Result<f64, String> {
+            let v: f64 = num(k, req(a, k)?)?;
+            if v.is_finite() && v >= 0.0 {
+                Ok(v)
+            } else {
+                Err(format!(
+                    "metadata '{k}' must be a finite non-negative number"
+                ))
+            }
+        }
         fn opt<T: std::str::FromStr>(
             a: &BTreeMap<String, String>,
             k: &str,
@@ -343,14 +353,7 @@ impl RenderMetadata {
                 None => None,
                 Some(iterations) => {
                     let n = |k: &str| -> std::result::Result<u64, String> { num(k, req(a, k)?) };
-                    let secs = |k: &str| -> std::result::Result<f64, String> {
-                        let v: f64 = num(k, req(a, k)?)?;
-                        if v.is_finite() && v >= 0.0 {
-                            Ok(v)
-                        } else {
-                            Err(format!("metadata '{k}' must be a finite time"))
-                        }
-                    };
+                    let secs = |k: &str| non_negative(a, k);
                     Some(GuideRecord {
                         iterations,
                         training_spp: n("guide_training_spp")?,
@@ -365,14 +368,7 @@ impl RenderMetadata {
             estimate: match opt::<u32>(a, "replicates")? {
                 None => None,
                 Some(replicates) => {
-                    let err = |k: &str| -> std::result::Result<f64, String> {
-                        let v: f64 = num(k, req(a, k)?)?;
-                        if v.is_finite() && v >= 0.0 {
-                            Ok(v)
-                        } else {
-                            Err(format!("metadata '{k}' must be a finite error"))
-                        }
-                    };
+                    let err = |k: &str| non_negative(a, k);
                     Some(EstimateRecord {
                         replicates,
                         method: req(a, "error_estimate")?.to_string(),

@@ -731,8 +731,11 @@ impl<F: SamplerFactory> Job<'_, F> {
             } else {
                 size.min(spp / r64 - planned.min(spp / r64))
             };
-            if size == 0 || (rounds > 0 && self.stopped()) {
-                interrupted = rounds > 0 && self.stopped() && size > 0;
+            if size == 0 {
+                break;
+            }
+            if rounds > 0 && self.stopped() {
+                interrupted = true;
                 break;
             }
             let counts: Vec<u32> = if rounds == 0 {
@@ -754,42 +757,32 @@ impl<F: SamplerFactory> Job<'_, F> {
                 count: &counts,
             };
             let none = SamplePass { origin: 0, size: 1 };
+            // the first round runs whole, so the image holds something (a stop before it ends
+            // costs that round); a later one the stop flag cuts is dropped
+            let stop = plan.stop.filter(|_| rounds > 0);
             let mut films = Vec::with_capacity(reps as usize);
-            let mut cut = false;
             for rep in 0..reps {
                 let mut f = Film::new(w, h);
-                let (_, c) = self.batch(rep, (none, 0..0, plan.stop, Some(alloc)), &mut f, stats);
-                cut |= c;
+                let (_, cut) = self.batch(rep, (none, 0..0, stop, Some(alloc)), &mut f, stats);
                 if cut {
+                    interrupted = true;
                     break;
                 }
                 films.push(f);
             }
-            if cut {
-                interrupted = rounds > 0;
-                if rounds > 0 {
-                    break;
-                }
-                // a round must finish for the image to hold anything: render the first one
-                // whole (a stop before any round ends costs one round)
-                films.clear();
-                for rep in 0..reps {
-                    let mut f = Film::new(w, h);
-                    self.batch(rep, (none, 0..0, None, Some(alloc)), &mut f, stats);
-                    films.push(f);
-                }
-                interrupted = true;
+            if interrupted {
+                break;
             }
             for (rep, f) in films.iter().enumerate() {
                 replicates.add_means(rep as u32, f, size as f64);
                 raw.merge(f).map_err(Error::Settings)?;
             }
-            // a mean whose pixel sums are F·n: the film's mean is the weighted one
             for (o, &c) in next.iter_mut().zip(&counts) {
                 *o += c as u64;
             }
             planned += size;
             rounds += 1;
+            interrupted = self.stopped();
             if interrupted || plan.time_limit.is_some_and(|t| self.start.elapsed() >= t) {
                 break;
             }
