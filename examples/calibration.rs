@@ -1,12 +1,14 @@
 //! The calibration table of the README: on every shipped scene, for each sampler and several
 //! seeds, the image's own error estimate (from 4 replicates, and per sample) against the error
-//! measured against an independent-sample reference; and a log-log calibration plot.
+//! measured against an independent-sample reference; and a log-log calibration plot. Then what
+//! the 4 replicates cost: the measured MSE of the same renders as one set of all their samples
+//! (pooled over seeds: Σ MSE(4 sets of N/4) / Σ MSE(1 set of N)).
 //!
 //! `cargo run --release --example calibration -- [--size W H] [--spp N] [--ref-spp M]
 //! [--seeds K] [--plot FILE.png]`
 
 use std::path::Path;
-use vrpt::analysis::calibration::{calibrate, reference_settings, Case};
+use vrpt::analysis::calibration::{calibrate, one_set, reference_settings, Case};
 use vrpt::output::render_image;
 use vrpt::render::{render_passes, NoProgress, PassPlan, RenderSettings};
 use vrpt::sampler::SamplerKind;
@@ -46,6 +48,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "scene", "sampler", "measured", "estimated", "ratio", "range", "per-sample"
     );
     let mut all: Vec<(String, Case)> = Vec::new();
+    let mut cost = String::new();
     for name in scenes {
         let scene = vrpt::scene::load(Path::new(&format!("scenes/{name}")))?;
         let base = RenderSettings {
@@ -60,6 +63,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let meta = vrpt::output::RenderMetadata::new(&scene, &rs, &r.stats);
         let reference = render_image(&r.film, &meta);
         let cases = calibrate(&scene, &base, &reference, &samplers, &seeds)?;
+        let single = one_set(&scene, &base, &reference, &samplers, &seeds)?;
+        for (k, sampler) in samplers.iter().enumerate() {
+            let at = k * seeds.len()..(k + 1) * seeds.len();
+            let four: f64 = cases[at.clone()].iter().map(|c| c.measured_mse).sum();
+            let one: f64 = single[at].iter().sum();
+            cost += &format!(
+                "{:<14} {:<12} {:>11.3e} {:>11.3e} {:>9.2}\n",
+                name,
+                sampler.to_string(),
+                four / seeds.len() as f64,
+                one / seeds.len() as f64,
+                four / one
+            );
+        }
         for sampler in samplers {
             let c: Vec<&Case> = cases.iter().filter(|c| c.sampler == sampler).collect();
             let med = |f: &dyn Fn(&Case) -> f64| {
@@ -91,6 +108,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!(
         "replicate estimate within 2x of the measured MSE: {within} of {} cases",
         all.len()
+    );
+    println!(
+        "\nwhat 4 replicates cost: measured MSE of 4 sets of {} against one set of {spp} \
+         (means over seeds)\n{:<14} {:<12} {:>11} {:>11} {:>9}\n{cost}",
+        spp / 4,
+        "scene",
+        "sampler",
+        "4 sets",
+        "1 set",
+        "ratio"
     );
     if let Some(p) = flag("--plot", 1) {
         let points: Vec<(f64, f64, String)> = all

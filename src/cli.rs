@@ -219,6 +219,8 @@ pub struct ExperimentArgs {
     /// Write a self-contained HTML report: the summary, images (HDR), error views, metrics.
     #[arg(long, value_name = "HTML")]
     pub report: Option<PathBuf>,
+    #[command(flatten)]
+    pub allocation: vrpt::commands::experiment::AllocationArgs,
     /// No progress bar.
     #[arg(short, long)]
     pub quiet: bool,
@@ -288,9 +290,7 @@ fn out(text: &str) {
 
 /// Print warnings (a scene's) to stderr.
 fn warn(msgs: &[String]) {
-    for m in msgs {
-        eprintln!("warning: {m}");
-    }
+    msgs.iter().for_each(|m| eprintln!("warning: {m}"));
 }
 
 /// Print a command's text, then which files it wrote and what else it says of them.
@@ -367,11 +367,7 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode> {
         eprintln!("{}{timing}wrote {}", r.summary, r.output.display());
     }
     warn(&r.warnings());
-    Ok(if r.interrupted {
-        ExitCode::from(130)
-    } else {
-        ExitCode::SUCCESS
-    })
+    Ok(ExitCode::from(if r.interrupted { 130 } else { 0 }))
 }
 
 fn run_merge(args: MergeArgs) -> Result<()> {
@@ -411,6 +407,7 @@ fn experiment_request(a: ExperimentArgs) -> ExperimentRequest {
         csv: a.csv,
         json: a.json,
         report: a.report,
+        allocation: a.allocation,
     }
 }
 

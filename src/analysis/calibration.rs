@@ -6,6 +6,11 @@
 //! `variance` channels: honest when the reference was rendered with independent samples, which
 //! [`reference_settings`] does), since `E[(x − r)²] = Var x + Var r` for independent images. The
 //! relMSE is measured as [`crate::analysis::metrics`] does, with the reference's pixels.
+//!
+//! What replicates cost: [`one_set`] measures the same renders as one set of all the samples
+//! (`replicates = 1`), so `measured_mse` of a case over its one-set MSE is the price of R
+//! randomizations of N/R samples against one of N (1 for independent samples; more where
+//! stratification or Sobol points converge faster than 1/N).
 
 use crate::analysis::metrics::{mean_variance, metrics};
 use crate::error::Result;
@@ -92,4 +97,30 @@ pub fn calibrate(
         }
     }
     Ok(cases)
+}
+
+/// The MSE measured against `reference` (less its variance) of the renders [`calibrate`] makes,
+/// each as one set of all its samples (`replicates = 1`), in [`calibrate`]'s order (sampler
+/// major, then seed).
+pub fn one_set(
+    scene: &Scene,
+    settings: &RenderSettings,
+    reference: &RgbImage,
+    samplers: &[SamplerKind],
+    seeds: &[u64],
+) -> Result<Vec<f64>> {
+    let floor = reference.variance.as_deref().map_or(0.0, mean_variance);
+    let mut out = Vec::new();
+    for &sampler in samplers {
+        for &seed in seeds {
+            let mut s = settings.clone();
+            s.strategy.sampler = sampler;
+            s.seed = seed;
+            s.replicates = 1;
+            let r = render_passes(scene, &s, &PassPlan::default(), &NoProgress)?;
+            let m = metrics(&r.film.mean_image(), &reference.pixels);
+            out.push((m.mse - floor).max(f64::MIN_POSITIVE));
+        }
+    }
+    Ok(out)
 }

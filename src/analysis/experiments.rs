@@ -39,12 +39,19 @@ use std::time::Duration;
 type EntryRender<'a> = dyn Fn(&Scene, &RenderSettings, &PassPlan) -> Result<Rendered> + Sync + 'a;
 
 /// One line of an experiment: a name, the strategy it renders with (directions, lights, light
-/// points and choice; and the sampler, for a built-in entry), and the renderer.
+/// points and choice; and the sampler, for a built-in entry), how its samples are allocated,
+/// and the renderer.
 pub struct Entry<'a> {
     /// The name in tables, files and reports.
     pub name: String,
     /// The strategy of every run (for a custom entry, its `sampler` is not used).
     pub strategy: Strategy,
+    /// Replicates of every run ([`RenderSettings::replicates`]; 1 unless set with
+    /// [`Entry::with_replicates`]): with 2 or more, a run's estimated error comes from their
+    /// spread.
+    pub replicates: u32,
+    /// Adaptive sampling ([`PassPlan::adaptive`]), set by [`Entry::adaptive`].
+    pub adaptive: bool,
     render: Box<EntryRender<'a>>,
 }
 
@@ -54,6 +61,8 @@ impl Entry<'static> {
         Entry {
             name: strategy.to_string(),
             strategy,
+            replicates: 1,
+            adaptive: false,
             render: Box::new(|scene, settings, plan| {
                 render_passes(scene, settings, plan, &NoProgress)
             }),
@@ -68,10 +77,28 @@ impl<'a> Entry<'a> {
         Entry {
             name: name.to_string(),
             strategy,
+            replicates: 1,
+            adaptive: false,
             render: Box::new(move |scene, settings, plan| {
                 render_passes_with(scene, settings, plan, &factory, &NoProgress)
             }),
         }
+    }
+}
+
+impl Entry<'_> {
+    /// Every run as `r` replicates, each a complete set of the run's spp/r samples.
+    pub fn with_replicates(mut self, r: u32) -> Self {
+        self.replicates = r;
+        self
+    }
+
+    /// Adaptive allocation of every run's samples, named "<name> adaptive" (needs at least 2
+    /// replicates: the run fails otherwise).
+    pub fn adaptive(mut self) -> Self {
+        self.name += " adaptive";
+        self.adaptive = true;
+        self
     }
 }
 
@@ -80,6 +107,8 @@ impl std::fmt::Debug for Entry<'_> {
         f.debug_struct("Entry")
             .field("name", &self.name)
             .field("strategy", &self.strategy)
+            .field("replicates", &self.replicates)
+            .field("adaptive", &self.adaptive)
             .finish_non_exhaustive()
     }
 }
@@ -230,6 +259,13 @@ pub struct CompareRow {
     pub mae: f64,
     /// Per-pixel variance of one run, across runs (averaged over pixels and channels).
     pub variance: f64,
+    /// Mean over runs of the MSE each run estimated for itself ([`crate::estimate`]).
+    pub est_mse: f64,
+    /// Mean over runs of the relMSE each run estimated for itself.
+    pub est_rel_mse: f64,
+    /// How the runs estimated it: "replicates" (honest for every sampler) or "per-sample"
+    /// (one replicate: `s²/n`, an overestimate for stratified and Sobol points).
+    pub estimate: String,
     /// Bias test of the runs against the reference: Student's t and its two-sided p.
     pub bias_t: f64,
     /// Two-sided p of `bias_t`.
@@ -274,6 +310,9 @@ pub struct Comparison {
     /// The per-pixel variance of the mean of each strategy's first run (for the report).
     #[serde(skip)]
     pub variances: Vec<Vec<Vec3>>,
+    /// For each adaptive entry (`None` for the others), its first run's samples per pixel.
+    #[serde(skip)]
+    pub spp_maps: Vec<Option<Vec<u32>>>,
     /// The reference's mean variance of the mean, if it records one: the floor under every MSE.
     pub reference_variance: Option<f64>,
 }
@@ -340,9 +379,11 @@ pub fn compare_entries(
         let mut region_rows: Vec<RegionRow> = Vec::new();
         let mut images = Vec::new();
         let mut variances = Vec::new();
+        let mut spp_maps = Vec::new();
         for st in strategies {
             let mut runs: Vec<Vec<Vec3>> = Vec::new();
             let (mut secs, mut spps, mut ms) = (Vec::new(), Vec::new(), Vec::<Metrics>::new());
+            let (mut est, mut method) = (Vec::new(), String::new());
             let mut region_ms: Vec<Vec<Metrics>> = vec![Vec::new(); s.regions.len()];
             for (k, seed) in s.run_seeds().into_iter().enumerate() {
                 let max_spp = if equal_time.is_some() {
@@ -350,10 +391,13 @@ pub fn compare_entries(
                 } else {
                     spp
                 };
-                let settings = run_settings(&st.strategy, s, max_spp, seed);
+                let settings = run_settings(st, s, max_spp, seed);
+                // equal spp: the render's own passes (one per replicate); equal time: passes of
+                // `spp`, a whole pass past the limit
                 let plan = PassPlan {
-                    pass_spp: Some(spp),
+                    pass_spp: equal_time.map(|_| spp),
                     time_limit: equal_time,
+                    adaptive: st.adaptive,
                     ..PassPlan::default()
                 };
                 let r = (st.render)(scene, &settings, &plan)?;
@@ -361,7 +405,10 @@ pub fn compare_entries(
                 let img = film.mean_image();
                 if k == 0 {
                     variances.push(film.variance_image());
+                    spp_maps.push(st.adaptive.then(|| samples_per_pixel(&film)));
+                    method = r.estimate.method.name().to_string();
                 }
+                est.push((r.estimate.mse, r.estimate.rel_mse));
                 ms.push(metrics(&img, &reference.pixels));
                 for (r, m) in s.regions.iter().zip(&mut region_ms) {
                     m.push(region_metrics(&img, &reference.pixels, s.width, r));
@@ -394,6 +441,9 @@ pub fn compare_entries(
                 rmse: mean_of(&ms, |m| m.rmse),
                 mae: mean_of(&ms, |m| m.mae),
                 variance: variance_across_runs(&runs),
+                est_mse: mean_of(&est, |e| e.0),
+                est_rel_mse: mean_of(&est, |e| e.1),
+                estimate: method,
                 bias_t: bias.t,
                 bias_p: bias.p,
                 mse_reduction: 1.0,
@@ -422,13 +472,14 @@ pub fn compare_entries(
             regions: region_rows,
             images,
             variances,
+            spp_maps,
             reference_variance,
         })
     })?
 }
 
 /// The render settings of run `k` of strategy `st`, on the job's thread pool.
-fn run_settings(st: &Strategy, s: &ExperimentSettings, spp: u32, seed: u64) -> RenderSettings {
+fn run_settings(st: &Entry, s: &ExperimentSettings, spp: u32, seed: u64) -> RenderSettings {
     RenderSettings {
         width: s.width,
         height: s.height,
@@ -436,12 +487,19 @@ fn run_settings(st: &Strategy, s: &ExperimentSettings, spp: u32, seed: u64) -> R
         first_sample: 0,
         max_depth: s.max_depth,
         seed,
-        strategy: *st,
+        strategy: st.strategy,
         threads: None,
         time_traces: false,
         guide_pdf_scale: 1.0,
-        replicates: 1,
+        replicates: st.replicates,
     }
+}
+
+/// The samples each pixel of `film` holds, row-major (what an adaptive run spent where).
+fn samples_per_pixel(film: &crate::film::Film) -> Vec<u32> {
+    (0..film.len())
+        .map(|i| film.count(i).min(u32::MAX as u64) as u32)
+        .collect()
 }
 
 /// One small untimed render, so the first timed run does not pay for starting the thread pool
@@ -470,6 +528,10 @@ pub struct ConvergePoint {
     pub rel_mse: f64,
     /// Mean wall time per run.
     pub seconds: f64,
+    /// Mean over runs of the MSE each run estimated for itself ([`crate::estimate`]).
+    pub est_mse: f64,
+    /// Mean over runs of the relMSE each run estimated for itself.
+    pub est_rel_mse: f64,
 }
 
 /// A sweep: points in (strategy, spp) order, and per strategy the fitted log-log slopes of MSE
@@ -484,6 +546,10 @@ pub struct Convergence {
     /// of its mean (for the report).
     #[serde(skip)]
     pub images: Vec<(Vec<Vec3>, Vec<Vec3>)>,
+    /// Per point, for adaptive entries (`None` for the others), the first run's samples per
+    /// pixel.
+    #[serde(skip)]
+    pub spp_maps: Vec<Option<Vec<u32>>>,
 }
 
 /// The fitted convergence rates of one strategy.
@@ -530,18 +596,27 @@ pub fn converge_entries(
         let mut points = Vec::new();
         let mut slopes = Vec::new();
         let mut images = Vec::new();
+        let mut spp_maps = Vec::new();
         for st in strategies {
             let mut xs = Vec::new();
             let (mut ys, mut rs) = (Vec::new(), Vec::new());
             for &spp in spps {
                 let (mut mse, mut rel, mut secs) = (0.0, 0.0, 0.0);
+                let (mut est_mse, mut est_rel) = (0.0, 0.0);
                 for (k, seed) in s.run_seeds().into_iter().enumerate() {
-                    let settings = run_settings(&st.strategy, s, spp, seed);
-                    let r = (st.render)(scene, &settings, &PassPlan::default())?;
+                    let settings = run_settings(st, s, spp, seed);
+                    let plan = PassPlan {
+                        adaptive: st.adaptive,
+                        ..PassPlan::default()
+                    };
+                    let r = (st.render)(scene, &settings, &plan)?;
+                    est_mse += r.estimate.mse;
+                    est_rel += r.estimate.rel_mse;
                     let (film, stats) = (r.film, r.stats);
                     let img = film.mean_image();
                     let m = metrics(&img, &reference.pixels);
                     if k == 0 {
+                        spp_maps.push(st.adaptive.then(|| samples_per_pixel(&film)));
                         images.push((img, film.variance_image()));
                     }
                     mse += m.mse;
@@ -557,6 +632,8 @@ pub fn converge_entries(
                     mse: mse / k,
                     rel_mse: rel / k,
                     seconds: secs / k,
+                    est_mse: est_mse / k,
+                    est_rel_mse: est_rel / k,
                 });
                 xs.push(spp as f64);
                 ys.push(mse / k);
@@ -572,6 +649,7 @@ pub fn converge_entries(
             points,
             slopes,
             images,
+            spp_maps,
         })
     })?
 }
@@ -580,11 +658,12 @@ impl Comparison {
     /// The comparison as a table (what `vrpt compare` prints).
     pub fn table(&self) -> String {
         let mut s = format!(
-            "{:<22} {:>7} {:>9} {:>11} {:>11} {:>11} {:>8} {:>8} {:>10} {:>10}\n",
+            "{:<22} {:>7} {:>9} {:>11} {:>11} {:>11} {:>11} {:>8} {:>8} {:>10} {:>10}\n",
             "strategy",
             "spp",
             "time s",
             "MSE",
+            "est. MSE",
             "relMSE",
             "variance",
             "bias t",
@@ -594,14 +673,19 @@ impl Comparison {
         );
         for r in &self.rows {
             s += &format!(
-                "{:<22} {:>7.1} {:>9.3} {:>11.4e} {:>11.4e} {:>11.4e} {:>+8.2} {:>8.3} {:>9.2}x {:>9.2}x\n",
-                r.strategy, r.spp, r.seconds, r.mse, r.rel_mse, r.variance, r.bias_t, r.bias_p, r.mse_reduction, r.efficiency
+                "{:<22} {:>7.1} {:>9.3} {:>11.4e} {:>11.4e} {:>11.4e} {:>11.4e} {:>+8.2} {:>8.3} {:>9.2}x {:>9.2}x\n",
+                r.strategy, r.spp, r.seconds, r.mse, r.est_mse, r.rel_mse, r.variance, r.bias_t, r.bias_p, r.mse_reduction, r.efficiency
             );
         }
         s += &format!(
-            "(MSE reduction and efficiency 1/(MSE·time) relative to {}; means over {} runs",
+            "(MSE reduction and efficiency 1/(MSE·time) relative to {}; means over {} runs; \
+             est. MSE: what each run estimated for itself, {}",
             self.baseline,
-            self.rows.first().map_or(0, |r| r.runs)
+            self.rows.first().map_or(0, |r| r.runs),
+            match self.rows.first().map(|r| r.estimate.as_str()) {
+                Some("replicates") => "from its replicates",
+                _ => "per sample (s²/n, too high for stratified and Sobol points: --replicates)",
+            }
         );
         if let Some(v) = self.reference_variance {
             s += &format!("; the reference's own variance, {v:.3e}, is a floor under every MSE");
@@ -636,13 +720,13 @@ impl Convergence {
     /// The sweep as a table of points and slopes (what `vrpt converge` prints).
     pub fn table(&self) -> String {
         let mut s = format!(
-            "{:<22} {:>7} {:>11} {:>11} {:>9}\n",
-            "strategy", "spp", "MSE", "relMSE", "time s"
+            "{:<22} {:>7} {:>11} {:>11} {:>11} {:>9}\n",
+            "strategy", "spp", "MSE", "est. MSE", "relMSE", "time s"
         );
         for p in &self.points {
             s += &format!(
-                "{:<22} {:>7} {:>11.4e} {:>11.4e} {:>9.3}\n",
-                p.strategy, p.spp, p.mse, p.rel_mse, p.seconds
+                "{:<22} {:>7} {:>11.4e} {:>11.4e} {:>11.4e} {:>9.3}\n",
+                p.strategy, p.spp, p.mse, p.est_mse, p.rel_mse, p.seconds
             );
         }
         s += "fitted slopes of log error against log spp:\n";

@@ -277,6 +277,28 @@ pub fn write_error_map(path: &Path, image: &RgbImage, reference: &RgbImage) -> R
 /// Write the samples of each pixel (`w × h`, row-major) as a false-colour PNG on a log scale,
 /// with its colour bar and range; returns the range. What an adaptive render spent where.
 pub fn write_spp_map(path: &Path, samples: &[u32], (w, h): (u32, u32)) -> Result<(f64, f64)> {
+    let (c, range) = spp_map(samples, (w, h))?;
+    c.write(path)?;
+    Ok(range)
+}
+
+/// [`write_spp_map`]'s picture as PNG bytes (for the HTML report).
+pub fn spp_map_png(samples: &[u32], (w, h): (u32, u32)) -> Result<Vec<u8>> {
+    let (c, _) = spp_map(samples, (w, h))?;
+    let mut out = std::io::Cursor::new(Vec::new());
+    image::write_buffer_with_format(
+        &mut out,
+        &c.buf,
+        c.w,
+        c.h,
+        image::ExtendedColorType::Rgb8,
+        image::ImageFormat::Png,
+    )
+    .map_err(|e| Error::Settings(format!("spp map: {e}")))?;
+    Ok(out.into_inner())
+}
+
+fn spp_map(samples: &[u32], (w, h): (u32, u32)) -> Result<(Canvas, (f64, f64))> {
     let map: Vec<f64> = samples.iter().map(|&n| n as f64).collect();
     let lo = map.iter().copied().fold(f64::INFINITY, f64::min).max(1.0);
     let hi = map.iter().copied().fold(0.0, f64::max).max(lo * 10.0);
@@ -285,8 +307,7 @@ pub fn write_spp_map(path: &Path, samples: &[u32], (w, h): (u32, u32)) -> Result
     let mut c = Canvas::new((w * scale).max(420), h * scale + BAR_H);
     c.blit(0, 0, w, h, scale, &|k| colours[k]);
     c.colour_bar(0, h * scale, lo, hi, "samples per pixel, log scale")?;
-    c.write(path)?;
-    Ok((lo, hi))
+    Ok((c, (lo, hi)))
 }
 
 /// Write two directional densities side by side as one false-colour PNG (log scale, shared):

@@ -192,6 +192,29 @@ pub struct Report {
     pub plot_svg: Option<String>,
     /// What the page opens on, for a comparison.
     pub summary: Option<Summary>,
+    /// The samples per pixel of adaptive runs, as PNG pictures (see [`SppMap`]).
+    pub spp_maps: Vec<SppMap>,
+}
+
+/// What an adaptive run spent where: its samples per pixel as a false-colour PNG with its
+/// colour bar ([`crate::analysis::plots::spp_map_png`]), base64 in the payload.
+#[derive(Clone, Debug, Serialize)]
+pub struct SppMap {
+    /// The run's entry.
+    pub name: String,
+    /// The PNG, base64.
+    pub png: String,
+}
+
+impl SppMap {
+    /// The map of `samples` (`w × h`, row-major) under `name`.
+    pub fn new(name: &str, samples: &[u32], (w, h): (u32, u32)) -> Result<SppMap> {
+        let png = crate::analysis::plots::spp_map_png(samples, (w, h))?;
+        Ok(SppMap {
+            name: name.into(),
+            png: base64::engine::general_purpose::STANDARD.encode(png),
+        })
+    }
 }
 
 #[derive(Serialize)]
@@ -214,6 +237,7 @@ struct Payload<'a> {
     tables: &'a [Table],
     plot_svg: Option<&'a str>,
     summary: Option<&'a Summary>,
+    spp_maps: &'a [SppMap],
 }
 
 /// The payload's form of an image: its values as binary16, RGB interleaved, the little-endian
@@ -292,6 +316,7 @@ impl Report {
             tables: &self.tables,
             plot_svg: self.plot_svg.as_deref(),
             summary: self.summary.as_ref(),
+            spp_maps: &self.spp_maps,
         };
         let json = serde_json::to_string(&payload)
             .map_err(|e| Error::Settings(format!("report: {e}")))?
@@ -320,6 +345,9 @@ fn compare_columns() -> Vec<Column> {
         Column::number("rmse", "RMSE"),
         Column::number("mae", "MAE"),
         Column::number("variance", "variance"),
+        Column::number("est_mse", "estimated MSE"),
+        Column::number("est_rel_mse", "estimated relMSE"),
+        Column::text("estimate", "estimated from"),
         Column::number("bias_t", "bias t"),
         Column::number("bias_p", "bias p"),
         Column::number("mse_reduction", "MSE reduction"),
@@ -389,6 +417,13 @@ impl Report {
             tables,
             plot_svg: None,
             summary: Some(Summary::of(c, equal_time)),
+            spp_maps: c
+                .rows
+                .iter()
+                .zip(&c.spp_maps)
+                .filter_map(|(row, m)| Some((row, m.as_ref()?)))
+                .map(|(row, m)| SppMap::new(&row.strategy, m, (reference.width, reference.height)))
+                .collect::<Result<_>>()?,
         })
     }
 
@@ -438,7 +473,11 @@ impl Report {
                     let mut m = serde_json::Map::new();
                     m.insert("strategy".into(), s.strategy.clone().into());
                     for p in c.points.iter().filter(|p| p.strategy == s.strategy) {
-                        let v = if key == "mse" { p.mse } else { p.rel_mse };
+                        let v = match key {
+                            "mse" => p.mse,
+                            "est_mse" => p.est_mse,
+                            _ => p.rel_mse,
+                        };
                         m.insert(format!("{key}_{}", p.spp), number(v));
                     }
                     m
@@ -463,6 +502,7 @@ impl Report {
                 "strategy",
             )?,
             by_spp("mse", "MSE")?,
+            by_spp("est_mse", "estimated MSE")?,
             by_spp("rel_mse", "relMSE")?,
         ];
         Ok(Report {
@@ -475,6 +515,16 @@ impl Report {
             tables,
             plot_svg: Some(plot_svg),
             summary: None,
+            spp_maps: c
+                .points
+                .iter()
+                .zip(&c.spp_maps)
+                .filter_map(|(p, m)| Some((p, m.as_ref()?)))
+                .map(|(p, m)| {
+                    let name = format!("{}, {} spp", p.strategy, p.spp);
+                    SppMap::new(&name, m, (reference.width, reference.height))
+                })
+                .collect::<Result<_>>()?,
         })
     }
 
@@ -513,6 +563,7 @@ impl Report {
             tables: vec![rows],
             plot_svg: None,
             summary: None,
+            spp_maps: Vec::new(),
         }
     }
 }
@@ -566,6 +617,7 @@ mod tests {
             tables: vec![],
             plot_svg: None,
             summary: None,
+            spp_maps: vec![],
         };
         let html = r.to_html().unwrap();
         assert_eq!(
@@ -596,6 +648,9 @@ mod tests {
             rmse: 0.0,
             mae: 0.0,
             variance: 0.0,
+            est_mse: 0.0,
+            est_rel_mse: 0.0,
+            estimate: "per-sample".into(),
             bias_t: 0.0,
             bias_p: 1.0,
             mse_reduction: 1.0,
@@ -612,6 +667,7 @@ mod tests {
             baseline: "a".into(),
             images: vec![],
             variances: vec![],
+            spp_maps: vec![],
             reference_variance: None,
         };
         let s = Summary::of(&c, false);

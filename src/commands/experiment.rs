@@ -4,7 +4,8 @@
 
 use super::{resolve_regions, Written};
 use crate::analysis::experiments::{
-    compare, converge, write_csv, Comparison, Convergence, ExperimentSettings,
+    compare_entries, converge_entries, write_csv, Comparison, Convergence, Entry,
+    ExperimentSettings,
 };
 use crate::analysis::metrics::Region;
 use crate::analysis::plots::{convergence_svg, write_comparison_grid, write_convergence_plot};
@@ -33,6 +34,43 @@ pub struct ExperimentRequest {
     pub csv: Option<PathBuf>,
     pub json: Option<PathBuf>,
     pub report: Option<PathBuf>,
+    pub allocation: AllocationArgs,
+}
+
+/// How the runs of `compare` and `converge` allocate their samples (their flags).
+#[derive(Clone, Debug, Default, clap::Args)]
+pub struct AllocationArgs {
+    /// Render each run as R independent randomizations, each a complete set of spp/R samples,
+    /// so each run estimates its own error honestly (shown beside the measured error) [default:
+    /// 1, or 4 with --adaptive]
+    #[arg(long, value_name = "R", value_parser = clap::value_parser!(u32).range(1..=256))]
+    pub replicates: Option<u32>,
+    /// Run every strategy twice, with uniform and with adaptive allocation ("S adaptive"), at
+    /// the same replicates; the report shows the adaptive runs' samples per pixel.
+    #[arg(long)]
+    pub adaptive: bool,
+}
+
+impl ExperimentRequest {
+    /// The experiment's entries: each strategy at the requested replicates, and with
+    /// `--adaptive` its adaptive twin after it.
+    pub fn entries(&self) -> Result<Vec<Entry<'static>>> {
+        let a = &self.allocation;
+        let r = a.replicates.unwrap_or(if a.adaptive { 4 } else { 1 });
+        if a.adaptive && r < 2 {
+            return Err(Error::Settings(
+                "--adaptive needs at least 2 replicates: it allocates from their spread".into(),
+            ));
+        }
+        let mut entries = Vec::new();
+        for &st in &self.strategies {
+            entries.push(Entry::builtin(st).with_replicates(r));
+            if a.adaptive {
+                entries.push(Entry::builtin(st).with_replicates(r).adaptive());
+            }
+        }
+        Ok(entries)
+    }
 }
 
 /// `vrpt compare`: the strategies at equal spp, or at equal time per run.
@@ -96,6 +134,7 @@ fn prepare_common(a: &ExperimentRequest) -> Result<(Scene, RgbImage, ExperimentS
     if a.strategies.is_empty() {
         return Err(Error::Settings("no strategies to run".into()));
     }
+    a.entries()?;
     let scene = scene::load(&a.scene)?;
     let reference = read_exr(&a.reference)?;
     let s = ExperimentSettings::for_reference(
@@ -138,7 +177,9 @@ fn settings_list<R>(p: &Prepared<R>, a: &ExperimentRequest) -> Vec<(String, Stri
             || "no vrpt metadata".into(),
             |m| format!("{} spp, {}", m.spp, m.strategy),
         );
-    let strategies: Vec<String> = a.strategies.iter().map(|s| s.to_string()).collect();
+    let entries = a.entries().unwrap_or_default();
+    let strategies: Vec<String> = entries.iter().map(|e| e.name.clone()).collect();
+    let replicates = entries.first().map_or(1, |e| e.replicates);
     let seeds: Vec<String> = p.settings.run_seeds().iter().map(u64::to_string).collect();
     let s = &p.settings;
     vec![
@@ -152,6 +193,7 @@ fn settings_list<R>(p: &Prepared<R>, a: &ExperimentRequest) -> Vec<(String, Stri
         ("runs".into(), a.runs.to_string()),
         ("seeds".into(), seeds.join(", ")),
         ("strategies".into(), strategies.join(", ")),
+        ("replicates per run".into(), replicates.to_string()),
         ("max depth".into(), s.max_depth.to_string()),
         ("vrpt".into(), env!("CARGO_PKG_VERSION").into()),
     ]
@@ -189,15 +231,15 @@ impl Experiment for Prepared<CompareRequest> {
     /// One unit per run.
     fn work(&self) -> u64 {
         let a = &self.request.experiment;
-        a.strategies.len() as u64 * a.runs as u64
+        a.entries().map_or(0, |e| e.len()) as u64 * a.runs as u64
     }
 
     fn run(self, progress: &dyn Progress) -> Result<Outcome<Comparison>> {
         let (req, a) = (&self.request, &self.request.experiment);
-        let c = compare(
+        let c = compare_entries(
             &self.scene,
             &self.reference,
-            &a.strategies,
+            &a.entries()?,
             req.spp,
             req.equal_time.map(Duration::from_secs_f64),
             &self.settings,
@@ -288,17 +330,17 @@ impl Experiment for Prepared<ConvergeRequest> {
     /// The samples per pixel of every run.
     fn work(&self) -> u64 {
         let a = &self.request.experiment;
-        a.strategies.len() as u64
+        a.entries().map_or(0, |e| e.len()) as u64
             * a.runs as u64
             * self.request.spp.iter().map(|&x| x as u64).sum::<u64>()
     }
 
     fn run(self, progress: &dyn Progress) -> Result<Outcome<Convergence>> {
         let (req, a) = (&self.request, &self.request.experiment);
-        let c = converge(
+        let c = converge_entries(
             &self.scene,
             &self.reference,
-            &a.strategies,
+            &a.entries()?,
             &req.spp,
             &self.settings,
             progress,
