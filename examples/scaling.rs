@@ -95,7 +95,7 @@ fn main() {
                     up: Vec3::Y,
                     fov_deg: 45.0,
                 }),
-                environment: Some(Vec3::ONE),
+                environment: Some(Vec3::ONE.into()),
                 ..Default::default()
             },
             Vec::new(),

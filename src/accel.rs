@@ -183,6 +183,7 @@ impl Accel {
             origin,
             dir,
             tmax,
+            |_, _| true,
         )
     }
 
@@ -195,7 +196,31 @@ impl Accel {
         dir: Vec3,
         tmax: f32,
     ) -> Option<Hit> {
-        self.closest(&mut stack.0, origin, dir, tmax)
+        self.closest(&mut stack.0, origin, dir, tmax, |_, _| true)
+    }
+
+    /// [`Accel::intersect_with`] where a triangle hit counts only if `keep(prim, (b1, b2))`
+    /// says so (alpha cutouts): a hit it refuses is passed through inside the traversal, and
+    /// the closest kept hit is returned.
+    #[inline]
+    pub fn intersect_filtered(
+        &self,
+        stack: &mut TraceStack,
+        (origin, dir, tmax): (Vec3, Vec3, f32),
+        keep: impl Fn(u32, Vec2) -> bool,
+    ) -> Option<Hit> {
+        self.closest(&mut stack.0, origin, dir, tmax, keep)
+    }
+
+    /// [`Accel::occluded_with`] where a triangle hit blocks only if `keep(prim, (b1, b2))`.
+    #[inline]
+    pub fn occluded_filtered(
+        &self,
+        stack: &mut TraceStack,
+        (origin, dir, tmax): (Vec3, Vec3, f32),
+        keep: impl Fn(u32, Vec2) -> bool,
+    ) -> bool {
+        self.any(&mut stack.0, origin, dir, tmax, keep)
     }
 
     /// True if anything lies along `origin + t·dir` for `t ∈ (0, tmax)` (any hit, early out).
@@ -206,6 +231,7 @@ impl Accel {
             origin,
             dir,
             tmax,
+            |_, _| true,
         )
     }
 
@@ -218,7 +244,7 @@ impl Accel {
         dir: Vec3,
         tmax: f32,
     ) -> bool {
-        self.any(&mut stack.0, origin, dir, tmax)
+        self.any(&mut stack.0, origin, dir, tmax, |_, _| true)
     }
 
     #[inline(always)]
@@ -228,6 +254,7 @@ impl Accel {
         origin: Vec3,
         dir: Vec3,
         tmax: f32,
+        keep: impl Fn(u32, Vec2) -> bool,
     ) -> Option<Hit> {
         let mut ray = Ray::new(Vec3A::from(origin), Vec3A::from(dir), 0.0, tmax);
         let mut state = Walk::new(stack, ray.direction, self.bvh.nodes.is_empty());
@@ -242,7 +269,7 @@ impl Accel {
             {
                 let id = state.primitive_id;
                 if let Some((t, n, det)) = hit_triangle(&self.tris[id as usize], &ray) {
-                    if t < ray.tmax {
+                    if t < ray.tmax && keep(id, n / det) {
                         ray.tmax = t;
                         best = Some((id, n, det));
                     }
@@ -262,7 +289,14 @@ impl Accel {
     }
 
     #[inline(always)]
-    fn any<S: FastStack<UVec2>>(&self, stack: &mut S, origin: Vec3, dir: Vec3, tmax: f32) -> bool {
+    fn any<S: FastStack<UVec2>>(
+        &self,
+        stack: &mut S,
+        origin: Vec3,
+        dir: Vec3,
+        tmax: f32,
+        keep: impl Fn(u32, Vec2) -> bool,
+    ) -> bool {
         let ray = Ray::new(Vec3A::from(origin), Vec3A::from(dir), 0.0, tmax);
         let mut state = Walk::new(stack, ray.direction, self.bvh.nodes.is_empty());
         let mut node;
@@ -274,9 +308,12 @@ impl Accel {
                 state,
                 node.intersect_ray(&ray, state.oct_inv4),
                 {
-                    if hit_triangle(&self.tris[state.primitive_id as usize], &ray).is_some() {
-                        hit = true;
-                        break 'walk;
+                    let id = state.primitive_id;
+                    if let Some((_, n, det)) = hit_triangle(&self.tris[id as usize], &ray) {
+                        if keep(id, n / det) {
+                            hit = true;
+                            break 'walk;
+                        }
                     }
                 }
             );

@@ -248,9 +248,7 @@ pub fn radiance_guided<S: Sampler>(
             rays.bounce += 1;
         }
         let Some(hit) = timed(settings.time_traces, rays, || {
-            scene
-                .accel
-                .intersect_with(stack, origin, dir, f32::INFINITY)
+            scene.intersect(stack, origin, dir, f32::INFINITY)
         }) else {
             let w = match (mode, prev) {
                 (_, None) | (LightStrategy::Bsdf, _) => 1.0,
@@ -259,9 +257,10 @@ pub fn radiance_guided<S: Sampler>(
                     mis_weight(v.pdf, lights.environment_pdf(v.n, dir))
                 }
             };
-            l += beta * scene.environment() * w;
+            let le = scene.environment().radiance(dir);
+            l += beta * le * w;
             if let (true, Some(p)) = (recorded_last && mode == LightStrategy::Mis, &mut pending) {
-                p[n_pending - 1].extra += beta * scene.environment() * (1.0 - w);
+                p[n_pending - 1].extra += beta * le * (1.0 - w);
             }
             break;
         };
@@ -330,7 +329,7 @@ pub fn radiance_guided<S: Sampler>(
                         rays.shadow += 1;
                         if tmax > 0.0
                             && !timed(settings.time_traces, rays, || {
-                                scene.accel.occluded_with(stack, spawn, to, tmax)
+                                scene.occluded(stack, spawn, to, tmax)
                             })
                         {
                             let w = match mode {

@@ -66,6 +66,7 @@ pub mod analysis;
 pub mod bsdf;
 pub mod camera;
 pub mod commands;
+pub mod environment;
 pub mod error;
 pub mod estimate;
 pub mod film;
@@ -84,5 +85,6 @@ pub mod sampling;
 pub mod scene;
 pub mod stats;
 pub mod strategy;
+pub mod texture;
 
 pub use error::{Error, Result};

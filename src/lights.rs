@@ -1,5 +1,5 @@
 //! The lights of a scene and how they are sampled: the emitters (emissive triangles, and pairs
-//! of them that form a rectangle) and the constant environment when it is not black.
+//! of them that form a rectangle) and the environment when it is not black.
 //!
 //! - **Emitters** are one-sided: an emitter sends `Le` to the side its counter-clockwise normal
 //!   `n_l` points to. Two emissive triangles of the same emission that share their diagonal and
@@ -21,11 +21,14 @@
 //!   or more than [`MAX_SOLID_ANGLE`] (6.22 sr), a rectangle less than
 //!   [`MIN_RECTANGLE_SOLID_ANGLE`] (10⁻⁴ sr) or more than 6.22 sr. The pdf of a point is always
 //!   the pdf of the method that sampled it from that receiver (the same test decides).
-//! - **The environment** (radiance `L_env` for every escaping ray) is sampled by a cosine
-//!   distribution about `n`: `p_ω = cosθ/π`, zero below. Under a diffuse BSDF `f cosθ / p_ω =
-//!   kd`, so a white furnace has no variance.
+//! - **The environment** ([`Environment`]: a constant radiance, or an HDR map) is sampled by a
+//!   cosine distribution about `n`, `p_ω = cosθ/π` (zero below): always for a constant one (under
+//!   a diffuse BSDF `f cosθ / p_ω = kd`, so a white furnace has no variance), and for a map with
+//!   `--light-points area` (the strategy that ignores where a light's radiance comes from). With
+//!   `solid-angle` or `projected` a map is sampled by its luminance ([`EnvMap::sample`], the
+//!   piecewise-constant lat-long distribution with its sinθ).
 //! - **Which light** ([`LightChoice`], `--light-choice`): `uniform` (every light of positive
-//!   power alike), `power` (`Φ = π A lum(Le)` for an emitter, `4π · πR² · lum(L_env)` for the
+//!   power alike), `power` (`Φ = π A lum(Le)` for an emitter, `πR² ∫lum(L_env) dω` for the
 //!   environment seen by a scene of bounding radius `R`, pbrt's estimate), or `tree`: the
 //!   environment by power against all emitters, then a light BVH ([`LightTree`]: Conty Estevez
 //!   & Kulla 2018, pbrt-v4's `BVHLightSampler`) descended from the root, each child chosen in
@@ -45,6 +48,7 @@
 //! the choice probability. [`Lights::light_of`] maps a BVH-order primitive to its emitter, so a
 //! BSDF-sampled ray that hits an emitter finds the light pdf of the same path for MIS.
 
+use crate::environment::{EnvMap, Environment};
 use crate::math::Frame;
 use crate::sampling::{
     bilinear_pdf, cosine_hemisphere_pdf, sample_bilinear, sample_cosine_hemisphere,
@@ -274,8 +278,8 @@ pub struct LightSample {
 pub struct Lights {
     /// The emitters (triangles and rectangles), in BVH order of their first primitive.
     pub emitters: Vec<Emitter>,
-    /// Radiance of the environment (zero: it is no light).
-    pub environment: Vec3,
+    /// The environment (black: it is no light).
+    pub environment: Environment,
     /// `light_index[prim]`: the emitter of BVH-order triangle `prim`, or [`NO_LIGHT`].
     light_index: Vec<u32>,
     /// Choice by power, and uniform: each emitter, then the environment (last).
@@ -287,23 +291,20 @@ pub struct Lights {
     tree: OnceLock<LightTree>,
 }
 
-/// Luminance (Rec. 709 weights) of linear RGB.
-#[inline]
-pub fn luminance(c: Vec3) -> f32 {
-    c.dot(Vec3::new(0.2126, 0.7152, 0.0722))
-}
+pub use crate::math::luminance;
 
 impl Lights {
     /// The lights of a scene of `primitives` triangles: its emissive triangles (each knowing its
     /// BVH-order primitive; pairs that make a rectangle become one emitter), and the
-    /// environment of radiance `environment` lighting a scene of bounding radius `radius`. Err
-    /// with more than 2²⁴ lights (see [`Discrete`]).
+    /// `environment` (a radiance, or an [`Environment`]) lighting a scene of bounding radius
+    /// `radius`. Err with more than 2²⁴ lights (see [`Discrete`]).
     pub fn build(
         triangles: Vec<Emitter>,
         primitives: usize,
-        environment: Vec3,
+        environment: impl Into<Environment>,
         radius: f32,
     ) -> Result<Lights, String> {
+        let environment = environment.into();
         let emitters = pair_rectangles(triangles);
         let mut light_index = vec![NO_LIGHT; primitives];
         for (i, e) in emitters.iter().enumerate() {
@@ -312,7 +313,7 @@ impl Lights {
             }
         }
         let mut power: Vec<f64> = emitters.iter().map(|e| e.power() as f64).collect();
-        let env_power = (4.0 * PI * PI * radius * radius * luminance(environment).max(0.0)) as f64;
+        let env_power = (PI * radius * radius) as f64 * environment.luminance_integral();
         power.push(env_power);
         let ones: Vec<f64> = power
             .iter()
@@ -525,12 +526,22 @@ impl LightSampler<'_> {
                 })
             }
             Chosen::Environment => {
+                if let Some(m) = self.map_sampled() {
+                    let (wi, le, pdf) = m.sample(u)?;
+                    return Some(LightSample {
+                        wi,
+                        dist: f32::INFINITY,
+                        le,
+                        pdf: pmf * pdf,
+                    });
+                }
                 let local = sample_cosine_hemisphere(u);
                 let pdf = pmf * cosine_hemisphere_pdf(local.z);
+                let wi = Frame::from_normal(n).to_world(local);
                 (pdf > 0.0).then(|| LightSample {
-                    wi: Frame::from_normal(n).to_world(local),
+                    wi,
                     dist: f32::INFINITY,
-                    le: self.lights.environment,
+                    le: self.lights.environment.radiance(wi),
                     pdf,
                 })
             }
@@ -611,7 +622,20 @@ impl LightSampler<'_> {
     /// normal `n` returns the environment direction `wi`.
     #[inline]
     pub fn environment_pdf(&self, n: Vec3, wi: Vec3) -> f32 {
-        self.environment_pmf() * cosine_hemisphere_pdf(n.dot(wi))
+        match self.map_sampled() {
+            Some(m) => self.environment_pmf() * m.pdf(wi),
+            None => self.environment_pmf() * cosine_hemisphere_pdf(n.dot(wi)),
+        }
+    }
+
+    /// The environment map, when it is sampled by its luminance (a map, and light points other
+    /// than `area`); `None` when the environment is sampled by the cosine.
+    #[inline]
+    fn map_sampled(&self) -> Option<&EnvMap> {
+        match self.points {
+            LightPoints::Area => None,
+            _ => self.lights.environment.map(),
+        }
     }
 }
 

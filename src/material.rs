@@ -2,9 +2,47 @@
 //! (one-sided, on the front face). Where `kd + ks > 1` in a channel both are scaled down in that
 //! channel, so the modified Phong BSDF ([`crate::bsdf`]) that `Scene::bsdf_at` builds from it
 //! conserves energy.
+//!
+//! Textures ([`Maps`], the MTL's `map_Kd`, `map_Ks`, `map_Ns`) multiply their constants, as the
+//! MTL format says (`Kd 1 1 1` with `map_Kd` shows the texture as it is): at a point of texture
+//! coordinates `uv`, `kd·T_kd(uv)`, `ks·T_ks(uv)`, `n·T_Ns(uv)` (the scalar maps read their red
+//! channel), scaled down per channel where `kd + ks > 1` (only an HDR texture can get there).
 
 use crate::bsdf::Bsdf;
-use glam::Vec3;
+use crate::texture::{TextureRef, TextureSet};
+use glam::{Vec2, Vec3};
+
+/// The textures of a material.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Maps {
+    /// `map_Kd`: multiplies kd (sRGB-decoded).
+    pub kd: Option<TextureRef>,
+    /// `map_Ks`: multiplies ks (sRGB-decoded).
+    pub ks: Option<TextureRef>,
+    /// `map_Ns`: multiplies the exponent (linear, red channel).
+    pub ns: Option<TextureRef>,
+    /// `map_d`: opacity (the alpha channel where the file has one, else its red channel);
+    /// below 0.5 the surface is not there ([`Material::opaque_at`]).
+    pub opacity: Option<TextureRef>,
+    /// `bump` / `map_Bump`: a height map (linear, red channel) and its `-bm` multiplier.
+    pub bump: Option<(TextureRef, f32)>,
+    /// `norm`: a tangent-space normal map (linear, `n = 2c − 1`).
+    pub normal: Option<TextureRef>,
+}
+
+impl Maps {
+    /// True when a map changes the BSDF's reflectances or exponent.
+    #[inline]
+    pub fn colour(&self) -> bool {
+        self.kd.is_some() || self.ks.is_some() || self.ns.is_some()
+    }
+
+    /// True when a map perturbs the shading normal.
+    #[inline]
+    pub fn perturbs_normal(&self) -> bool {
+        self.bump.is_some() || self.normal.is_some()
+    }
+}
 
 /// A modified Phong material with optional one-sided emission. The reflectances are read
 /// through methods: the BSDF is built from them once, so they cannot change behind its back.
@@ -21,6 +59,8 @@ pub struct Material {
     exponent: f32,
     /// The BSDF built from kd, ks and the exponent once, for surfaces without texture.
     bsdf: Bsdf,
+    /// Its textures (none by default).
+    pub maps: Maps,
 }
 
 impl Material {
@@ -40,6 +80,7 @@ impl Material {
             exponent,
             emission: emission.max(Vec3::ZERO),
             bsdf: Bsdf::new(kd, ks, exponent),
+            maps: Maps::default(),
         };
         (m, scaled)
     }
@@ -73,6 +114,36 @@ impl Material {
     #[inline]
     pub fn bsdf(&self) -> Bsdf {
         self.bsdf
+    }
+
+    /// The BSDF at texture coordinates `uv` (the textures of `textures`): kd, ks and the
+    /// exponent times their maps, scaled down per channel where `kd + ks > 1`.
+    #[inline]
+    pub fn bsdf_at(&self, uv: Vec2, textures: &TextureSet) -> Bsdf {
+        if !self.maps.colour() {
+            return self.bsdf;
+        }
+        let rgb = |r: &Option<TextureRef>| {
+            r.map_or(Vec3::ONE, |r| {
+                textures.get(&r).bilinear(r.map(uv)).truncate()
+            })
+        };
+        let kd = self.kd * rgb(&self.maps.kd);
+        let ks = self.ks * rgb(&self.maps.ks);
+        let n = self.exponent * rgb(&self.maps.ns).x;
+        let scale = Vec3::ONE / (kd + ks).max(Vec3::ONE);
+        Bsdf::new(kd * scale, ks * scale, n.max(0.0))
+    }
+
+    /// Whether the surface is there at `uv`: its `map_d` opacity is at least 0.5 (always, for
+    /// a material without one).
+    #[inline]
+    pub fn opaque_at(&self, uv: Vec2, textures: &TextureSet) -> bool {
+        self.maps.opacity.is_none_or(|r| {
+            let t = textures.get(&r);
+            let v = t.bilinear(r.map(uv));
+            (if t.has_alpha() { v.w } else { v.x }) >= 0.5
+        })
     }
 
     /// True when the material emits.

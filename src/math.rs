@@ -76,6 +76,12 @@ pub fn average(v: Vec3) -> f32 {
     (v.x + v.y + v.z) * (1.0 / 3.0)
 }
 
+/// Luminance (Rec. 709 weights) of linear RGB.
+#[inline]
+pub fn luminance(c: Vec3) -> f32 {
+    c.dot(Vec3::new(0.2126, 0.7152, 0.0722))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -208,8 +208,15 @@ impl RenderStats {
 
     /// The summary lines `vrpt render` prints: size, spp, strategy, time, rates and rays.
     pub fn summary(&self, scene: &Scene, settings: &RenderSettings) -> String {
+        let textures = match scene.textures.textures.len() {
+            0 => String::new(),
+            n => format!(
+                ", {n} textures ({:.1} KiB)",
+                scene.textures.bytes() as f64 / 1024.0
+            ),
+        };
         format!(
-            "{}: {} triangles, BVH built in {:.1} ms ({:.1} KiB)\n\
+            "{}: {} triangles, BVH built in {:.1} ms ({:.1} KiB){textures}\n\
              rendered {}x{} at {} spp ({}, max depth {}) in {:.3} s: {:.3} M samples/s, {:.2} Mrays/s\n\
              rays: {} ({} camera, {} bounce, {} shadow; {:.2} per sample)\n",
             scene.source.display(),

@@ -68,7 +68,7 @@ fn obj_with_mtl_loads_triangles_materials_and_emitters() {
         .iter()
         .any(|w| w.contains("shiny") && w.contains("scaled")));
     // a scene with emitters has a black environment by default
-    assert_eq!(s.environment(), Vec3::ZERO);
+    assert_eq!(s.environment(), &Vec3::ZERO.into());
     // each triangle's material: the floor quad is 'white' and has the file's normal
     let white = s.materials.iter().position(|m| m.name == "white").unwrap() as u32;
     let floor: Vec<_> = s.shading.iter().filter(|t| t.material == white).collect();
@@ -88,7 +88,7 @@ fn missing_mtl_falls_back_to_grey_with_a_warning() {
     assert_eq!(s.materials.len(), 1);
     assert!(s.lights.is_empty());
     // no emitters: a uniform white environment so the scene is visible
-    assert_eq!(s.environment(), Vec3::ONE);
+    assert_eq!(s.environment(), &Vec3::ONE.into());
 }
 
 #[test]
@@ -110,7 +110,7 @@ fn scene_toml_sets_camera_environment_and_defaults() {
         let s = scene::load(&path).unwrap();
         assert_eq!(s.camera.eye, Vec3::new(0.0, 1.0, 5.0));
         assert_eq!(s.camera.fov_deg, 30.0);
-        assert_eq!(s.environment(), Vec3::splat(0.5));
+        assert_eq!(s.environment(), &Vec3::splat(0.5).into());
         assert_eq!(s.defaults.width, Some(40));
         assert_eq!(s.defaults.spp, Some(3));
         assert_eq!(s.defaults.height, None);

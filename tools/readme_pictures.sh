@@ -65,4 +65,15 @@ cargo run --release -q --example calibration -- --size 64 48 --spp 64 --ref-spp 
 $vrpt render scenes/glossy-plates --width 128 --height 96 --spp 256 --seed 1 --adaptive -q \
     -o "$work/gp-adaptive.png" --spp-map "$out/glossy-plates-spp-map.png"
 
+# An HDR sky (README "An HDR sky"): sun-sky at 16 spp with the map's importance sampling (the
+# default) and with the cosine (--light-points area), and a 1024-spp image.
+$vrpt render scenes/sun-sky --width 256 --height 192 --spp 1024 -q -o "$out/sun-sky.png"
+$vrpt render scenes/sun-sky --width 256 --height 192 --spp 16 --seed 1 -q \
+    -o "$out/sun-sky-16spp-map.png"
+$vrpt render scenes/sun-sky --width 256 --height 192 --spp 16 --seed 1 -q --light-points area \
+    -o "$out/sun-sky-16spp-cosine.png"
+
+# Textures (README "Textures, cutouts and bump maps"): the textured scene at 256 spp.
+$vrpt render scenes/textured --width 256 --height 192 --spp 256 --seed 1 -q -o "$out/textured.png"
+
 ls -l "$out"/*.png

@@ -10,7 +10,10 @@
 //! up = [0.0, 1.0, 0.0]
 //! fov = 39.3            # vertical, degrees
 //! [environment]
-//! radiance = [0.0, 0.0, 0.0]
+//! radiance = [0.0, 0.0, 0.0]   # or, instead of radiance: an HDR lat-long map
+//! # map = "sky.exr"            # relative to this file; see crate::environment
+//! # rotation = 0.0             # degrees about +y
+//! # scale = 1.0                # multiplies the map's radiance
 //! [render]
 //! width = 256
 //! height = 256
@@ -59,11 +62,19 @@ fn default_fov() -> At<f32> {
     Spanned::new(0..0, 40.0)
 }
 
-/// `[environment]`: constant radiance for rays that escape.
+/// `[environment]`: what rays that escape see: a constant `radiance`, or an HDR lat-long `map`
+/// (an EXR, relative to the description) turned by `rotation` degrees about +y and multiplied
+/// by `scale` (see [`crate::environment`]).
 #[derive(Clone, Debug, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct EnvironmentSection {
-    pub radiance: At<[f32; 3]>,
+    pub radiance: Option<At<[f32; 3]>>,
+    pub map: Option<At<String>>,
+    pub rotation: Option<At<f32>>,
+    pub scale: Option<At<f32>>,
+    /// The line `map` stands on (for errors reading it), set by [`Description::parse`].
+    #[serde(skip)]
+    pub map_line: usize,
 }
 
 /// `[render]`: defaults that command-line flags override.
@@ -133,8 +144,45 @@ impl Description {
                 ));
             }
         }
-        if let Some(e) = &d.environment {
-            coords(&e.radiance, "environment.radiance", 0.0)?;
+        let mut d = d;
+        if let Some(e) = &mut d.environment {
+            if let Some(r) = &e.radiance {
+                coords(r, "environment.radiance", 0.0)?;
+            }
+            match (&e.radiance, &e.map) {
+                (Some(r), Some(_)) => {
+                    return Err(bad(
+                        r.span(),
+                        "environment",
+                        "give radiance or map, not both".into(),
+                    ))
+                }
+                (None, None) => return Err("environment: give radiance or map".into()),
+                (Some(_), None) => {
+                    if let Some(k) = [("rotation", &e.rotation), ("scale", &e.scale)]
+                        .into_iter()
+                        .find(|(_, v)| v.is_some())
+                    {
+                        return Err(format!("environment.{}: only for a map", k.0));
+                    }
+                }
+                (None, Some(m)) => e.map_line = line_of(m.span().start),
+            }
+            if let Some(r) = &e.rotation {
+                if !r.get_ref().is_finite() {
+                    return Err(bad(r.span(), "environment.rotation", "not finite".into()));
+                }
+            }
+            if let Some(sc) = &e.scale {
+                let x = *sc.get_ref();
+                if !(0.0..=MAX_MAGNITUDE).contains(&x) {
+                    return Err(bad(
+                        sc.span(),
+                        "environment.scale",
+                        format!("{x} is outside [0, {MAX_MAGNITUDE:e}]"),
+                    ));
+                }
+            }
         }
         if let Some(r) = &d.render {
             for (name, v, max) in [

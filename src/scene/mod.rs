@@ -12,13 +12,15 @@ pub mod description;
 pub mod generate;
 pub mod obj;
 
-use crate::accel::{Accel, Hit};
+use crate::accel::{Accel, Hit, TraceStack};
 use crate::bsdf::Bsdf;
 use crate::camera::CameraDesc;
+use crate::environment::{EnvMap, Environment};
 use crate::error::{Error, Result};
 use crate::lights::{Emitter, Lights};
 use crate::material::Material;
 use crate::math::hash_words;
+use crate::texture::TextureSet;
 use description::{Description, RenderSection};
 use glam::{Vec2, Vec3};
 use std::path::{Path, PathBuf};
@@ -81,16 +83,27 @@ pub struct Scene {
     /// Things the user should hear about (missing materials, scaled materials, …).
     pub warnings: Vec<String>,
     /// A hash of everything that determines the image (geometry, materials, camera,
-    /// environment): references record it, so a stale reference is detected.
+    /// environment; texture coordinates and texels where there are textures): references
+    /// record it, so a stale reference is detected.
     pub hash: u64,
+    /// The materials' textures.
+    pub textures: TextureSet,
+    /// Whether a material has an opacity map (rays then test cutouts during traversal).
+    cutouts: bool,
+    /// Whether a material has a bump or normal map.
+    perturbed: bool,
+    /// Whether a material has a colour or exponent map.
+    coloured: bool,
 }
 
 /// Optional settings for [`Scene::build`].
 #[derive(Clone, Debug, Default)]
 pub struct SceneOptions {
     pub camera: Option<CameraDesc>,
-    pub environment: Option<Vec3>,
+    pub environment: Option<Environment>,
     pub defaults: RenderSection,
+    /// The materials' textures.
+    pub textures: TextureSet,
 }
 
 impl Scene {
@@ -147,9 +160,9 @@ impl Scene {
         let environment = options.environment.unwrap_or_else(|| {
             if !has_emitters {
                 warnings.push("no emitters: lighting with a uniform white environment".into());
-                Vec3::ONE
+                Environment::Constant(Vec3::ONE)
             } else {
-                Vec3::ZERO
+                Environment::Constant(Vec3::ZERO)
             }
         });
         let radius = 0.5 * (hi - lo).length();
@@ -162,6 +175,11 @@ impl Scene {
                 Emitter::triangle(prim as u32, accel.vertices(prim as u32), emission)
             })
             .collect();
+        let camera = options.camera.unwrap_or_else(|| frame_bounds(lo, hi));
+        let mut hash = content_hash(&mesh, &materials, &camera, &environment);
+        if !options.textures.textures.is_empty() {
+            hash = texture_hash(hash, &mesh, &materials, &options.textures);
+        }
         let lights =
             Lights::build(emitters, shading.len(), environment, radius).map_err(|message| {
                 Error::Scene {
@@ -169,8 +187,6 @@ impl Scene {
                     message,
                 }
             })?;
-        let camera = options.camera.unwrap_or_else(|| frame_bounds(lo, hi));
-        let hash = content_hash(&mesh, &materials, &camera, environment);
         let extent = lo
             .abs()
             .max(hi.abs())
@@ -180,13 +196,17 @@ impl Scene {
             source,
             accel,
             shading,
-            materials,
             lights,
             camera,
             defaults: options.defaults,
             ray_epsilon: 1e-5 * extent.max(1e-3),
             warnings,
             hash,
+            cutouts: materials.iter().any(|m| m.maps.opacity.is_some()),
+            perturbed: materials.iter().any(|m| m.maps.perturbs_normal()),
+            coloured: materials.iter().any(|m| m.maps.colour()),
+            materials,
+            textures: options.textures,
         })
     }
 
@@ -208,25 +228,140 @@ impl Scene {
         if ns.dot(sh.ng) < 0.0 {
             ns = -ns;
         }
+        let uv = sh.uvs[0] * b0 + sh.uvs[1] * hit.b1 + sh.uvs[2] * hit.b2;
+        if self.perturbed {
+            ns = self.perturb(hit.prim, ns, uv);
+        }
         SurfacePoint {
             p,
             ng: sh.ng,
             ns,
-            uv: sh.uvs[0] * b0 + sh.uvs[1] * hit.b1 + sh.uvs[2] * hit.b2,
+            uv,
             material: sh.material,
         }
     }
 
-    /// Radiance of rays that escape (the environment light's, kept in [`Lights`]).
-    #[inline]
-    pub fn environment(&self) -> Vec3 {
-        self.lights.environment
+    /// The shading normal `ns` of BVH-order triangle `prim` at `uv` under its material's bump
+    /// or normal map (see [`crate::material::Maps`]), in the frame of the texture coordinates'
+    /// derivatives `∂p/∂u`, `∂p/∂v` across the triangle:
+    /// - bump: the height `h` displaces the surface along `ns`, `∂p'/∂u = ∂p/∂u + m·∂h/∂u·ns`
+    ///   (likewise v; ∂h by central differences one texel wide, `m` the `-bm` multiplier), and
+    ///   `ns' = ∂p'/∂u × ∂p'/∂v` turned to the side of `ns`;
+    /// - normal map: `ns' = t·x + b·y + ns·z` for the texel `(x, y, z) = 2c − 1`, with `t`
+    ///   the unit ∂p/∂u made orthogonal to `ns` and `b = ns × t` (turned to the side of ∂p/∂v).
+    ///
+    /// The two-sided rules stay: a perturbed normal that would fall on the other side of the
+    /// geometric normal than `ns` is dropped (`ns` kept), as is any on a triangle whose texture
+    /// coordinates are degenerate.
+    #[inline(never)]
+    fn perturb(&self, prim: u32, ns: Vec3, uv: Vec2) -> Vec3 {
+        let sh = &self.shading[prim as usize];
+        let maps = &self.materials[sh.material as usize].maps;
+        if !maps.perturbs_normal() {
+            return ns;
+        }
+        let [a, b, c] = self.accel.vertices(prim);
+        let (e1, e2) = (b - a, c - a);
+        let (d1, d2) = (sh.uvs[1] - sh.uvs[0], sh.uvs[2] - sh.uvs[0]);
+        let det = d1.x * d2.y - d1.y * d2.x;
+        if det.abs() < 1e-20 {
+            return ns;
+        }
+        let dpdu = (e1 * d2.y - e2 * d1.y) / det;
+        let dpdv = (e2 * d1.x - e1 * d2.x) / det;
+        let mut n = ns;
+        if let Some((r, mult)) = maps.bump {
+            let t = self.textures.get(&r);
+            let (w, h) = t.size();
+            // one texel in the texture's coordinates, back in the surface's
+            let (du, dv) = (
+                0.5 / (w as f32 * r.scale.x.abs().max(1e-12)),
+                0.5 / (h as f32 * r.scale.y.abs().max(1e-12)),
+            );
+            let height = |d: Vec2| t.bilinear(r.map(uv + d)).x;
+            let dhdu = (height(Vec2::new(du, 0.0)) - height(Vec2::new(-du, 0.0))) / (2.0 * du);
+            let dhdv = (height(Vec2::new(0.0, dv)) - height(Vec2::new(0.0, -dv))) / (2.0 * dv);
+            let pu = dpdu + ns * (mult * dhdu);
+            let pv = dpdv + ns * (mult * dhdv);
+            let m = pu.cross(pv);
+            let m = if m.dot(ns) < 0.0 { -m } else { m };
+            n = m.try_normalize().unwrap_or(ns);
+        }
+        if let Some(r) = maps.normal {
+            let c = self.textures.get(&r).bilinear(r.map(uv)).truncate() * 2.0 - Vec3::ONE;
+            let t = (dpdu - n * n.dot(dpdu)).try_normalize();
+            if let Some(t) = t {
+                let mut bt = n.cross(t);
+                if bt.dot(dpdv) < 0.0 {
+                    bt = -bt;
+                }
+                n = (t * c.x + bt * c.y + n * c.z).try_normalize().unwrap_or(n);
+            }
+        }
+        if n.dot(sh.ng) > 0.0 {
+            n
+        } else {
+            ns
+        }
     }
 
-    /// The BSDF at a surface point: the one place where a texture would enter.
+    /// The closest hit along `origin + t·dir`, `t < tmax`, passing through cutouts (where a
+    /// material's `map_d` opacity is below 0.5) inside the traversal.
+    #[inline]
+    pub fn intersect(
+        &self,
+        stack: &mut TraceStack,
+        origin: Vec3,
+        dir: Vec3,
+        tmax: f32,
+    ) -> Option<Hit> {
+        if self.cutouts {
+            self.accel
+                .intersect_filtered(stack, (origin, dir, tmax), |p, b| self.opaque(p, b))
+        } else {
+            self.accel.intersect_with(stack, origin, dir, tmax)
+        }
+    }
+
+    /// Whether anything but cutouts lies along `origin + t·dir`, `t ∈ (0, tmax)`.
+    #[inline]
+    pub fn occluded(&self, stack: &mut TraceStack, origin: Vec3, dir: Vec3, tmax: f32) -> bool {
+        if self.cutouts {
+            self.accel
+                .occluded_filtered(stack, (origin, dir, tmax), |p, b| self.opaque(p, b))
+        } else {
+            self.accel.occluded_with(stack, origin, dir, tmax)
+        }
+    }
+
+    /// Whether BVH-order triangle `prim` is there at barycentrics `b` (its opacity map, if
+    /// any, at least 0.5).
+    #[inline]
+    fn opaque(&self, prim: u32, b: Vec2) -> bool {
+        let sh = &self.shading[prim as usize];
+        let m = &self.materials[sh.material as usize];
+        if m.maps.opacity.is_none() {
+            return true;
+        }
+        let uv = sh.uvs[0] * (1.0 - b.x - b.y) + sh.uvs[1] * b.x + sh.uvs[2] * b.y;
+        m.opaque_at(uv, &self.textures)
+    }
+
+    /// What rays that escape see (the environment light, kept in [`Lights`]).
+    #[inline]
+    pub fn environment(&self) -> &Environment {
+        &self.lights.environment
+    }
+
+    /// The BSDF at a surface point: its material's, with the material's textures at `s.uv`.
     #[inline]
     pub fn bsdf_at(&self, s: &SurfacePoint) -> Bsdf {
-        self.materials[s.material as usize].bsdf()
+        let m = &self.materials[s.material as usize];
+        if self.coloured {
+            m.bsdf_at(s.uv, &self.textures)
+        } else {
+            m.bsdf()
+        }
     }
 
     /// The material at a surface point.
@@ -237,7 +372,12 @@ impl Scene {
 }
 
 /// Hash of the scene's content, in input order: every float by its bits.
-fn content_hash(mesh: &Mesh, materials: &[Material], camera: &CameraDesc, env: Vec3) -> u64 {
+fn content_hash(
+    mesh: &Mesh,
+    materials: &[Material],
+    camera: &CameraDesc,
+    env: &Environment,
+) -> u64 {
     fn put(words: &mut Vec<u64>, vs: &[Vec3]) {
         for v in vs {
             words.extend(v.to_array().map(|x| x.to_bits() as u64));
@@ -255,7 +395,9 @@ fn content_hash(mesh: &Mesh, materials: &[Material], camera: &CameraDesc, env: V
         put(&mut w, &[m.kd(), m.ks(), m.emission]);
         w.push(m.exponent().to_bits() as u64);
     }
-    put(&mut w, &[camera.eye, camera.target, camera.up, env]);
+    put(&mut w, &[camera.eye, camera.target, camera.up]);
+    // a constant environment's three words stand where they always stood: old hashes hold
+    w.extend(env.hash_words());
     w.push(camera.fov_deg.to_bits() as u64);
     hash_words(&w)
 }
@@ -291,14 +433,14 @@ pub fn load(path: &Path) -> Result<Scene> {
             });
         }
         let d = Description::load(&toml)?;
-        (path.join(&d.obj), Some(d))
+        (path.join(&d.obj), Some((d, toml)))
     } else {
         match path.extension().and_then(|e| e.to_str()) {
             Some(e) if e.eq_ignore_ascii_case("toml") => {
                 let d = Description::load(path)?;
                 (
                     path.parent().unwrap_or(Path::new(".")).join(&d.obj),
-                    Some(d),
+                    Some((d, path.to_path_buf())),
                 )
             }
             Some(e) if e.eq_ignore_ascii_case("obj") => {
@@ -306,7 +448,7 @@ pub fn load(path: &Path) -> Result<Scene> {
                 let d = if beside.is_file() {
                     let d = Description::load(&beside)?;
                     let names_us = Path::new(&d.obj).file_name() == path.file_name();
-                    names_us.then_some(d)
+                    names_us.then_some((d, beside))
                 } else {
                     None
                 };
@@ -320,21 +462,91 @@ pub fn load(path: &Path) -> Result<Scene> {
             }
         }
     };
-    let (mesh, materials, warnings) = obj::load_obj(&obj_path)?;
+    let (mesh, materials, textures, warnings) = obj::load_obj(&obj_path)?;
     let options = match desc {
-        Some(d) => SceneOptions {
+        Some((d, toml)) => SceneOptions {
             camera: d.camera.map(|c| CameraDesc {
                 eye: Vec3::from_array(c.eye.into_inner()),
                 target: Vec3::from_array(c.target.into_inner()),
                 up: Vec3::from_array(c.up.into_inner()),
                 fov_deg: c.fov.into_inner(),
             }),
-            environment: d
-                .environment
-                .map(|e| Vec3::from_array(e.radiance.into_inner())),
+            environment: d.environment.map(|e| environment(&e, &toml)).transpose()?,
             defaults: d.render.unwrap_or_default(),
+            textures,
         },
-        None => SceneOptions::default(),
+        None => SceneOptions {
+            textures,
+            ..SceneOptions::default()
+        },
     };
     Scene::build(obj_path, mesh, materials, options, warnings)
+}
+
+/// The environment of a description's `[environment]` (validated by
+/// [`Description::parse`]): its radiance, or its map read from beside `toml`. A map that cannot
+/// be read, or holds a negative or non-finite pixel, is one error naming the line of `map`.
+fn environment(e: &description::EnvironmentSection, toml: &Path) -> Result<Environment> {
+    let Some(map) = &e.map else {
+        let r = e.radiance.as_ref().map_or([0.0; 3], |r| *r.get_ref());
+        return Ok(Environment::Constant(Vec3::from_array(r)));
+    };
+    let err = |message: String| Error::Toml {
+        path: toml.to_path_buf(),
+        message: format!("line {}: environment.map: {message}", e.map_line),
+    };
+    let file = toml.parent().unwrap_or(Path::new(".")).join(map.get_ref());
+    let img = crate::image_io::read_exr(&file).map_err(|x| err(x.to_string()))?;
+    let rotation = e.rotation.as_ref().map_or(0.0, |r| *r.get_ref());
+    let scale = e.scale.as_ref().map_or(1.0, |s| *s.get_ref());
+    EnvMap::new(img.width, img.height, &img.pixels, rotation, scale)
+        .map(Environment::Map)
+        .map_err(|m| err(format!("{}: {m}", file.display())))
+}
+
+/// `hash` extended by what textures add to the image: every triangle's texture coordinates,
+/// the materials' maps, and the texels (only for scenes with textures, so the hash of a scene
+/// without them is what it always was).
+fn texture_hash(hash: u64, mesh: &Mesh, materials: &[Material], textures: &TextureSet) -> u64 {
+    let mut w: Vec<u64> = vec![hash];
+    let f = |x: f32| x.to_bits() as u64;
+    for t in &mesh.triangles {
+        if let Some(uv) = &t.uvs {
+            w.extend(uv.iter().flat_map(|v| [f(v.x), f(v.y)]));
+        }
+    }
+    for m in materials {
+        let maps = &m.maps;
+        let refs = [
+            maps.kd,
+            maps.ks,
+            maps.ns,
+            maps.opacity,
+            maps.normal,
+            maps.bump.map(|b| b.0),
+        ];
+        for r in refs {
+            match r {
+                Some(r) => w.extend([
+                    r.index as u64,
+                    f(r.scale.x),
+                    f(r.scale.y),
+                    f(r.offset.x),
+                    f(r.offset.y),
+                ]),
+                None => w.push(u64::MAX),
+            }
+        }
+        w.push(maps.bump.map_or(0, |b| f(b.1)));
+    }
+    for t in &textures.textures {
+        let (tw, th) = t.size();
+        w.extend([tw as u64, th as u64]);
+        for y in 0..th as i64 {
+            for x in 0..tw as i64 {
+                w.extend(t.texel(x, y).to_array().map(f));
+            }
+        }
+    }
+    hash_words(&w)
 }

@@ -5,17 +5,24 @@
 //! `usemtl` naming an unknown material falls back to a grey diffuse material with a warning that
 //! names it; a malformed MTL is an error. OBJ parse errors are located by line number with a
 //! light pre-scan (tobj reports the kind of error only).
+//!
+//! Textures: the MTL's `map_Kd`, `map_Ks`, `map_Ns`, `map_d`, `bump`/`map_Bump` and `norm`
+//! statements are read here ([`parse_maps`]: the options `-s`, `-o`, `-bm`; others skipped and
+//! named in one warning), their files loaded once each ([`crate::texture::TextureSet`]) into the
+//! materials' [`crate::material::Maps`]; a file that cannot be read is an error naming the MTL
+//! line.
 
 use super::{Mesh, MeshTriangle};
 use crate::error::{clip, Error, Result};
 use crate::limits::MAX_MAGNITUDE;
 use crate::material::Material;
+use crate::texture::{Decode, TextureRef, TextureSet};
 use glam::{Vec2, Vec3};
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
-/// Load `path` into a triangle soup, its materials and any warnings.
-pub fn load_obj(path: &Path) -> Result<(Mesh, Vec<Material>, Vec<String>)> {
+/// Load `path` into a triangle soup, its materials, their textures and any warnings.
+pub fn load_obj(path: &Path) -> Result<(Mesh, Vec<Material>, TextureSet, Vec<String>)> {
     let text = crate::error::read_text(path)?;
     let mut warnings = Vec::new();
     let options = tobj::LoadOptions {
@@ -30,6 +37,8 @@ pub fn load_obj(path: &Path) -> Result<(Mesh, Vec<Material>, Vec<String>)> {
     check_obj_text(&text).map_err(obj_error)?;
     let mtl_path = mtllib_path(path, &text);
     let folder = path.parent().unwrap_or(Path::new("."));
+    // every MTL's texture statements, with the file they stand in
+    let mut map_lines: Vec<(PathBuf, MapLine)> = Vec::new();
     for name in text
         .lines()
         .filter_map(|l| l.trim().strip_prefix("mtllib "))
@@ -37,7 +46,24 @@ pub fn load_obj(path: &Path) -> Result<(Mesh, Vec<Material>, Vec<String>)> {
         let p = folder.join(name.trim());
         if p.is_file() {
             let mtl = crate::error::read_text(&p)?;
-            check_mtl_text(&mtl).map_err(|message| Error::Mtl { path: p, message })?;
+            check_mtl_text(&mtl).map_err(|message| Error::Mtl {
+                path: p.clone(),
+                message,
+            })?;
+            let mut ignored = BTreeSet::new();
+            let maps = parse_maps(&mtl, &mut ignored).map_err(|message| Error::Mtl {
+                path: p.clone(),
+                message,
+            })?;
+            if !ignored.is_empty() {
+                let list: Vec<&str> = ignored.iter().map(String::as_str).collect();
+                warnings.push(format!(
+                    "{}: ignored texture statements and options: {}",
+                    p.display(),
+                    clip(&list.join(", "))
+                ));
+            }
+            map_lines.extend(maps.into_iter().map(|m| (p.clone(), m)));
         }
     }
     let (models, materials) =
@@ -158,7 +184,8 @@ pub fn load_obj(path: &Path) -> Result<(Mesh, Vec<Material>, Vec<String>)> {
     if used_fallback {
         mats.push(Material::default_grey("default-grey"));
     }
-    Ok((Mesh { triangles }, mats, warnings))
+    let textures = attach_maps(&mut mats, &map_lines)?;
+    Ok((Mesh { triangles }, mats, textures, warnings))
 }
 
 fn convert_material(m: &tobj::Material) -> (Material, bool) {
@@ -331,4 +358,169 @@ pub fn check_mtl_text(text: &str) -> std::result::Result<(), String> {
         }
     }
     Ok(())
+}
+
+/// Load the textures of `lines` (each with its MTL) once per file and decoding, and give each
+/// material its maps (by name: a statement under `newmtl X` belongs to the material X). A file
+/// that cannot be read is one error naming the MTL and the statement's line.
+fn attach_maps(mats: &mut [Material], lines: &[(PathBuf, MapLine)]) -> Result<TextureSet> {
+    let mut set = TextureSet::default();
+    for (mtl, m) in lines {
+        let Some(mat) = mats.iter_mut().find(|x| x.name == m.material) else {
+            continue;
+        };
+        let decode = match m.key.as_str() {
+            "map_kd" | "map_ks" => Decode::Srgb,
+            _ => Decode::Linear,
+        };
+        let file = mtl.parent().unwrap_or(Path::new(".")).join(&m.file);
+        let index = set.load(&file, decode).map_err(|e| Error::Mtl {
+            path: mtl.clone(),
+            message: format!("line {}: {}: {e}", m.line, m.tag),
+        })?;
+        let r = TextureRef {
+            index,
+            scale: m.scale,
+            offset: m.offset,
+        };
+        let maps = &mut mat.maps;
+        match m.key.as_str() {
+            "map_kd" => maps.kd = Some(r),
+            "map_ks" => maps.ks = Some(r),
+            "map_ns" => maps.ns = Some(r),
+            "map_d" => maps.opacity = Some(r),
+            "norm" => maps.normal = Some(r),
+            _ => maps.bump = Some((r, m.bump_mult)),
+        }
+    }
+    Ok(set)
+}
+
+/// One texture statement of an MTL (`map_Kd`, `map_Ks`, `map_Ns`, `map_d`, `bump`,
+/// `map_Bump`, `norm`): its material, keyword (lower case), file (relative to the MTL) and
+/// options, and its line.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MapLine {
+    pub material: String,
+    /// The keyword as written, and in lower case.
+    pub tag: String,
+    pub key: String,
+    pub file: String,
+    /// `-s u v`: scale of the texture coordinates (default 1).
+    pub scale: Vec2,
+    /// `-o u v`: offset of the texture coordinates (default 0).
+    pub offset: Vec2,
+    /// `-bm m`: the bump multiplier (default 1).
+    pub bump_mult: f32,
+    /// Its line in the MTL, from 1.
+    pub line: usize,
+}
+
+/// The texture keywords vrpt reads.
+const MAP_KEYS: [&str; 7] = [
+    "map_kd", "map_ks", "map_ns", "map_d", "bump", "map_bump", "norm",
+];
+
+/// How many values each option of a texture statement takes (the MTL format's options; `-s`,
+/// `-o` and `-t` take up to three numbers, read while they are numbers).
+fn option_arity(opt: &str) -> Option<usize> {
+    Some(match opt {
+        "-blendu" | "-blendv" | "-cc" | "-clamp" | "-imfchan" | "-type" | "-boost" | "-texres"
+        | "-bm" => 1,
+        "-mm" => 2,
+        "-s" | "-o" | "-t" => 3,
+        _ => return None,
+    })
+}
+
+/// The texture statements of an MTL text. Options other than `-s`, `-o` and `-bm` are skipped,
+/// each named once in `ignored`; other texture keywords (`map_Ka`, `disp`, `refl`, …) are
+/// named there too. Err (one line, with the line number) for a statement without a file or a
+/// malformed number.
+pub fn parse_maps(
+    text: &str,
+    ignored: &mut BTreeSet<String>,
+) -> std::result::Result<Vec<MapLine>, String> {
+    let mut out = Vec::new();
+    let mut material = String::new();
+    for (no, line) in text.lines().enumerate() {
+        let mut words = line.split_whitespace();
+        let Some(tag) = words.next() else { continue };
+        if tag == "newmtl" {
+            material = words.collect::<Vec<_>>().join(" ");
+            continue;
+        }
+        let key = tag.to_ascii_lowercase();
+        if !MAP_KEYS.contains(&key.as_str()) {
+            if key.starts_with("map_") || ["disp", "decal", "refl"].contains(&key.as_str()) {
+                ignored.insert(tag.to_string());
+            }
+            continue;
+        }
+        let at = |what: String| format!("line {}: {tag}: {what}", no + 1);
+        let rest: Vec<&str> = words.collect();
+        let mut m = MapLine {
+            material: material.clone(),
+            tag: tag.to_string(),
+            key,
+            file: String::new(),
+            scale: Vec2::ONE,
+            offset: Vec2::ZERO,
+            bump_mult: 1.0,
+            line: no + 1,
+        };
+        let number = |w: &str| -> std::result::Result<f32, String> {
+            match w.parse::<f32>() {
+                Ok(x) if x.is_finite() => Ok(x),
+                _ => Err(at(format!("'{}' is not a finite number", clip(w)))),
+            }
+        };
+        let mut k = 0;
+        while k < rest.len() && rest[k].starts_with('-') && rest[k].parse::<f32>().is_err() {
+            let opt = rest[k];
+            k += 1;
+            let Some(arity) = option_arity(opt) else {
+                ignored.insert(opt.to_string());
+                // an unknown option: skip the numbers after it
+                while k < rest.len() && rest[k].parse::<f32>().is_ok() {
+                    k += 1;
+                }
+                continue;
+            };
+            let numeric = matches!(opt, "-s" | "-o" | "-t" | "-mm" | "-bm" | "-boost");
+            let mut values = Vec::new();
+            while values.len() < arity && k < rest.len() {
+                if numeric && rest[k].parse::<f32>().is_err() {
+                    break;
+                }
+                values.push(rest[k]);
+                k += 1;
+            }
+            if values.is_empty() {
+                return Err(at(format!("{opt} needs a value")));
+            }
+            match opt {
+                "-s" | "-o" => {
+                    let default = if opt == "-s" { 1.0 } else { 0.0 };
+                    let u = number(values[0])?;
+                    let v = values.get(1).map_or(Ok(default), |w| number(w))?;
+                    if opt == "-s" {
+                        m.scale = Vec2::new(u, v);
+                    } else {
+                        m.offset = Vec2::new(u, v);
+                    }
+                }
+                "-bm" => m.bump_mult = number(values[0])?,
+                _ => {
+                    ignored.insert(opt.to_string());
+                }
+            }
+        }
+        m.file = rest[k..].join(" ");
+        if m.file.is_empty() {
+            return Err(at("no file named".into()));
+        }
+        out.push(m);
+    }
+    Ok(out)
 }
