@@ -11,7 +11,14 @@ use vrpt::render::{render, NoProgress, RenderSettings};
 use vrpt::strategy::Preset;
 
 fn scenes(c: &mut Criterion) {
-    for name in ["cornell-box", "glossy-plates", "checker-plane"] {
+    // sun-sky: the environment map's sampling; textured: textures, cutouts, bump maps
+    for name in [
+        "cornell-box",
+        "glossy-plates",
+        "checker-plane",
+        "sun-sky",
+        "textured",
+    ] {
         let scene = vrpt::scene::load(
             &Path::new(env!("CARGO_MANIFEST_DIR"))
                 .join("scenes")

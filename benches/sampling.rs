@@ -188,5 +188,50 @@ fn lights(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, samplers, samplers_in_pixels, warps, lights);
+/// The environment map of sun-sky: a direction drawn by luminance, and the pdf of a direction.
+fn environment(c: &mut Criterion) {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/sun-sky");
+    let scene = vrpt::scene::load(std::path::Path::new(path)).expect("the shipped sun-sky");
+    let map = scene.environment().map().expect("sun-sky's sky is a map");
+    let us: Vec<Vec2> = (0..SAMPLES)
+        .map(|i| {
+            Vec2::new(
+                (i as f32 + 0.5) / SAMPLES as f32,
+                ((i * 7919) % SAMPLES) as f32 / SAMPLES as f32,
+            )
+        })
+        .collect();
+    let dirs: Vec<glam::Vec3> = us
+        .iter()
+        .filter_map(|&u| map.sample(u).map(|s| s.0))
+        .collect();
+    let mut g = c.benchmark_group("environment");
+    g.warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(2))
+        .throughput(Throughput::Elements(SAMPLES as u64));
+    g.bench_function("sample_map", |b| {
+        b.iter(|| {
+            us.iter()
+                .filter_map(|&u| map.sample(u))
+                .map(|s| s.2)
+                .sum::<f32>()
+        })
+    });
+    g.bench_function("pdf_map", |b| {
+        b.iter(|| dirs.iter().map(|&d| map.pdf(d)).sum::<f32>())
+    });
+    g.bench_function("radiance_map", |b| {
+        b.iter(|| dirs.iter().map(|&d| map.radiance(d).x).sum::<f32>())
+    });
+    g.finish();
+}
+
+criterion_group!(
+    benches,
+    samplers,
+    samplers_in_pixels,
+    warps,
+    lights,
+    environment
+);
 criterion_main!(benches);

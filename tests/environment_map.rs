@@ -315,3 +315,56 @@ fn nee_and_mis_with_the_map_are_unbiased_on_sun_sky() {
         eprintln!("sun-sky {lights}: worst |z| {worst:.2} (bound {z:.2})");
     }
 }
+
+/// MIS with the map: for random first hits of sun-sky and environment samples that escape,
+/// the light pdf a BSDF-sampled escaping ray along the same direction is weighted with
+/// (`LightSampler::environment_pdf`, what the integrator computes when a ray escapes) equals the
+/// sample's own pdf, for every way of placing points (the map's distribution for solid-angle
+/// and projected, the cosine for area) and of choosing lights; with the BSDF pdf shared by both
+/// sides (tests/light_sampling.rs), `w_light + w_bsdf = 1`. The two pdfs come from one texel
+/// lookup each, the sample's through its (u, v) and the ray's through the inverse map: equal
+/// to f32 rounding, except on texel boundaries, where they may name neighbours (rare; allowed
+/// for 1 in 1000).
+#[test]
+fn mis_weights_sum_to_one_with_the_map() {
+    use vrpt::lights::{LightChoice, LightPoints};
+    let scene = common::shipped("sun-sky");
+    let mut rng = SmallRng::seed_from_u64(common::seed(7));
+    let cam = vrpt::camera::Camera::new(&scene.camera, 64, 48).unwrap();
+    let (mut checked, mut off) = (0usize, 0usize);
+    for points in [
+        LightPoints::Area,
+        LightPoints::SolidAngle,
+        LightPoints::Projected,
+    ] {
+        for choice in [LightChoice::Uniform, LightChoice::Power, LightChoice::Tree] {
+            let lights = scene.lights.sampler(points, choice);
+            for _ in 0..2000 {
+                let px = glam::UVec2::new(rng.random_range(0..64), rng.random_range(0..48));
+                let (o, d) = cam.generate_ray(px, Vec2::new(rng.random(), rng.random()));
+                let Some(hit) = scene.accel.intersect(o, d, f32::INFINITY) else {
+                    continue;
+                };
+                let s = scene.surface(&hit);
+                let ns = if s.ng.dot(-d) > 0.0 { s.ns } else { -s.ns };
+                let u = (rng.random(), Vec2::new(rng.random(), rng.random()));
+                let Some(ls) = lights.sample(s.p, ns, u.0, u.1) else {
+                    continue;
+                };
+                assert!(ls.dist.is_infinite(), "sun-sky's only light is the sky");
+                assert_eq!(ls.le, scene.environment().radiance(ls.wi));
+                let p = lights.environment_pdf(ns, ls.wi);
+                checked += 1;
+                if (p - ls.pdf).abs() > 1e-4 * ls.pdf {
+                    off += 1;
+                }
+            }
+        }
+    }
+    eprintln!("{checked} samples, {off} with pdfs apart");
+    assert!(checked > 10_000);
+    assert!(
+        off * 1000 <= checked,
+        "{off} of {checked} samples' pdfs disagree"
+    );
+}
