@@ -93,7 +93,7 @@ impl Entry<'_> {
         self
     }
 
-    /// Adaptive allocation of every run's samples, named "<name> adaptive" (needs at least 2
+    /// Adaptive allocation of every run's samples, named "`<name> adaptive`" (needs at least 2
     /// replicates: the run fails otherwise).
     pub fn adaptive(mut self) -> Self {
         self.name += " adaptive";
