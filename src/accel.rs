@@ -108,6 +108,16 @@ fn hit_triangle(tri: &RtTriangle, ray: &Ray) -> Option<(f32, Vec2, f32)> {
     None
 }
 
+/// `dir` with every −0.0 component made +0.0. obvhs inverts a zero component as
+/// `signum(x)/ε` (−1/ε for −0.0) but orders the slabs and octants by `x < 0.0` (false for
+/// −0.0): a ray with a −0.0 component, e.g. `-Vec3::Z`, met a flat box's slabs in the wrong order
+/// and missed what it hit (found by the textures' tests: a ray straight down −z through a
+/// scene of axis-aligned quads). Adding +0.0 changes nothing else.
+#[inline(always)]
+fn positive_zeros(dir: Vec3) -> Vec3A {
+    Vec3A::from(dir) + Vec3A::ZERO
+}
+
 /// The BVH and the triangles in its order.
 pub struct Accel {
     bvh: CwBvh,
@@ -256,7 +266,7 @@ impl Accel {
         tmax: f32,
         keep: impl Fn(u32, Vec2) -> bool,
     ) -> Option<Hit> {
-        let mut ray = Ray::new(Vec3A::from(origin), Vec3A::from(dir), 0.0, tmax);
+        let mut ray = Ray::new(Vec3A::from(origin), positive_zeros(dir), 0.0, tmax);
         let mut state = Walk::new(stack, ray.direction, self.bvh.nodes.is_empty());
         let mut node;
         // the closest hit so far: primitive, barycentric numerators, denominator
@@ -297,7 +307,7 @@ impl Accel {
         tmax: f32,
         keep: impl Fn(u32, Vec2) -> bool,
     ) -> bool {
-        let ray = Ray::new(Vec3A::from(origin), Vec3A::from(dir), 0.0, tmax);
+        let ray = Ray::new(Vec3A::from(origin), positive_zeros(dir), 0.0, tmax);
         let mut state = Walk::new(stack, ray.direction, self.bvh.nodes.is_empty());
         let mut node;
         let mut hit = false;

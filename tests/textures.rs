@@ -13,9 +13,9 @@ use vrpt::render::RenderSettings;
 use vrpt::stats::{normal_critical_value, sidak};
 use vrpt::strategy::Strategy;
 
-/// Nearly −z: a ray exactly along an axis meets a flat bounding box (zero extent along that axis)
-/// in the traversal's slab test as 0·∞; real rays never do.
-const DOWN_Z: Vec3 = Vec3::new(1e-4, 2e-4, -1.0);
+/// Straight down −z, as `-Vec3::Z` is: with −0.0 in x and y (see
+/// `axis_rays_with_signed_zeros_hit_what_brute_force_hits`).
+const DOWN_Z: Vec3 = Vec3::new(-0.0, -0.0, -1.0);
 
 /// An 8-bit PNG of `w × h` RGBA pixels from `f(x, y)` (row 0 at the top).
 fn png(path: &Path, w: u32, h: u32, f: impl Fn(u32, u32) -> [u8; 4]) {
@@ -261,4 +261,32 @@ fn the_shipped_textured_scene_renders() {
         .intersect(&mut stack, origin, DOWN_Z, f32::INFINITY)
         .unwrap();
     assert!((hit.t - 2.0).abs() < 1e-3, "the bar: t = {}", hit.t);
+}
+
+/// Rays along the axes, with −0.0 or +0.0 in their zero components, find what testing every
+/// triangle finds, in the textured scene (whose quads lie in axis planes: flat boxes). obvhs
+/// inverted −0.0 as −1/ε but ordered slabs by `x < 0.0`: before `accel::positive_zeros`, the
+/// ray (−0.0, −0.0, −1) through the fence missed everything.
+#[test]
+fn axis_rays_with_signed_zeros_hit_what_brute_force_hits() {
+    let scene = common::shipped("textured");
+    let mut checked = 0;
+    for k in 0..200 {
+        let (a, b) = ((k % 20) as f32 / 20.0, (k / 20) as f32 / 10.0);
+        let origin = Vec3::new(-4.0 + 8.0 * a, 0.05 + 3.5 * b, 2.0);
+        for dir in [
+            -Vec3::Z,
+            Vec3::new(0.0, 0.0, -1.0),
+            -Vec3::Y,
+            Vec3::new(-0.0, -1.0, 0.0),
+        ] {
+            let bvh = scene.accel.intersect(origin, dir, f32::INFINITY);
+            let brute = scene
+                .accel
+                .intersect_brute_force(origin, dir, f32::INFINITY);
+            assert_eq!(bvh.map(|h| h.t), brute.map(|h| h.t), "{origin} {dir:?}");
+            checked += brute.is_some() as usize;
+        }
+    }
+    assert!(checked > 300, "{checked} rays hit");
 }
