@@ -7,8 +7,9 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Through
 use std::hint::black_box;
 use std::path::Path;
 use std::time::Duration;
+use vrpt::lights::LightPoints;
 use vrpt::render::{render, NoProgress, RenderSettings};
-use vrpt::strategy::Preset;
+use vrpt::strategy::{Preset, Strategy};
 
 fn scenes(c: &mut Criterion) {
     // sun-sky: the environment map's sampling; textured: textures, cutouts, bump maps
@@ -50,5 +51,55 @@ fn scenes(c: &mut Criterion) {
     }
 }
 
-criterion_group!(benches, scenes);
+/// The defaults' choices on the shipped Cornell box at 64×64, 16 spp (mis): each way of placing
+/// points on the light, and the default render in four replicates (issue 33: the defaults are
+/// chosen by efficiency; this holds what each choice costs).
+fn defaults(c: &mut Criterion) {
+    let scene =
+        vrpt::scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-box"))
+            .expect("shipped scene");
+    let (w, h, spp) = (64, 64, 16);
+    let mut g = c.benchmark_group("render_defaults");
+    g.sample_size(10)
+        .warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(3))
+        .throughput(Throughput::Elements((w * h * spp) as u64));
+    let base = RenderSettings {
+        width: w,
+        height: h,
+        spp,
+        ..Default::default()
+    };
+    let mut runs: Vec<(String, RenderSettings)> = LightPoints::value_variants()
+        .iter()
+        .map(|&p| {
+            let strategy = Strategy {
+                light_points: p,
+                ..Strategy::default()
+            };
+            (
+                format!("points_{p}"),
+                RenderSettings {
+                    strategy,
+                    ..base.clone()
+                },
+            )
+        })
+        .collect();
+    runs.push((
+        "replicates_4".into(),
+        RenderSettings {
+            replicates: 4,
+            ..base.clone()
+        },
+    ));
+    for (name, s) in &runs {
+        g.bench_with_input(BenchmarkId::from_parameter(name), s, |b, s| {
+            b.iter(|| black_box(render(&scene, s, &NoProgress).unwrap()))
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, scenes, defaults);
 criterion_main!(benches);

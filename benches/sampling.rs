@@ -173,6 +173,7 @@ fn lights(c: &mut Criterion) {
         LightPoints::Area,
         LightPoints::SolidAngle,
         LightPoints::Projected,
+        LightPoints::Auto,
     ] {
         let sampler = scene.lights.sampler(points, LightChoice::Tree);
         g.bench_function(format!("sample_{points}_tree"), |b| {

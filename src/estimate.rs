@@ -219,7 +219,8 @@ impl ErrorEstimate {
         let how = match self.method {
             Method::Replicates(r) => format!("from {r} replicates"),
             Method::PerSample => {
-                "per sample (s²/n: one replicate; an overestimate for stratified and Sobol points)"
+                "per sample (s²/n: one set of points; an upper bound for stratified and Sobol points, \
+                 --replicates 4 for an honest estimate)"
                     .into()
             }
         };

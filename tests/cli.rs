@@ -616,20 +616,37 @@ fn renders_state_their_error_and_adapt_on_request() {
         m.to_str().unwrap(),
     ]);
     assert_one_line_error(&out, "merge adaptive", "adaptive");
-    // one replicate falls back to the per-sample estimate and says so
-    let out = vrpt(&[
-        "render",
-        s,
-        "--width",
-        "8",
-        "--height",
-        "8",
-        "--replicates",
-        "1",
-        "-o",
-        exr.to_str().unwrap(),
-    ]);
-    assert!(String::from_utf8_lossy(&out.stderr).contains("per sample"));
+    // a plain render keeps one set of points (the default: replicates cost MSE), falls back
+    // to the per-sample estimate and says it is an upper bound; --target-error acts on the
+    // estimate and so takes 4 replicates
+    for (args, replicates) in [(vec![], 1), (vec!["--target-error", "1"], 4)] {
+        let mut a = vec![
+            "render",
+            s,
+            "--width",
+            "8",
+            "--height",
+            "8",
+            "-o",
+            exr.to_str().unwrap(),
+        ];
+        a.extend(args.iter());
+        let out = vrpt(&a);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{err}");
+        let img = vrpt::image_io::read_exr(&exr).unwrap();
+        let e = vrpt::output::RenderMetadata::require(&img, &exr)
+            .unwrap()
+            .estimate
+            .expect("an estimate");
+        assert_eq!(e.replicates, replicates, "{args:?}");
+        if replicates == 1 {
+            assert!(
+                err.contains("per sample") && err.contains("upper bound"),
+                "{err}"
+            );
+        }
+    }
     for (args, expect) in [
         (
             vec!["--adaptive", "--replicates", "1"],

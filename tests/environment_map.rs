@@ -336,6 +336,7 @@ fn mis_weights_sum_to_one_with_the_map() {
         LightPoints::Area,
         LightPoints::SolidAngle,
         LightPoints::Projected,
+        LightPoints::Auto,
     ] {
         for choice in [LightChoice::Uniform, LightChoice::Power, LightChoice::Tree] {
             let lights = scene.lights.sampler(points, choice);

@@ -20,16 +20,17 @@ use vrpt::sampling::sample_uniform_triangle;
 use vrpt::stats::{chi2_sf, pooled_chi2, sidak};
 
 /// Family-wise α = 0.01 over the chi-square tests of this file: the power choice, the
-/// triangle's area map, 4 tree receivers, and 2 shapes × 3 methods × 3 receivers of warps.
+/// triangle's area map, 4 tree receivers, and 2 shapes × 4 methods × 3 receivers of warps.
 fn alpha() -> f64 {
-    sidak(0.01, 2 + 4 + 18)
+    sidak(0.01, 2 + 4 + 24)
 }
 
 /// Every way of placing points on lights.
-const POINTS: [LightPoints; 3] = [
+const POINTS: [LightPoints; 4] = [
     LightPoints::Area,
     LightPoints::SolidAngle,
     LightPoints::Projected,
+    LightPoints::Auto,
 ];
 /// Every way of choosing lights.
 const CHOICES: [LightChoice; 3] = [LightChoice::Uniform, LightChoice::Power, LightChoice::Tree];
@@ -627,7 +628,7 @@ fn light_pdfs_integrate_to_the_light_choice() {
         2.0 * std::f64::consts::PI / m as f64,
     );
     let samplers = POINTS.map(|pts| scene.lights.sampler(pts, LightChoice::Tree));
-    let mut integral = [0.0f64; 3];
+    let mut integral = [0.0f64; POINTS.len()];
     let mut cos_l_range = (1.0f32, 0.0f32);
     for a in 0..m {
         let z = cos_max + (a as f64 + 0.5) * dz;
@@ -654,7 +655,7 @@ fn light_pdfs_integrate_to_the_light_choice() {
         }
     }
     eprintln!(
-        "∫ p_ω dω = {integral:.5?} (area, solid angle, projected); cosθ_l in {cos_l_range:?}"
+        "∫ p_ω dω = {integral:.5?} (area, solid angle, projected, auto); cosθ_l in {cos_l_range:?}"
     );
     assert!(
         cos_l_range.1 < 0.95,
@@ -676,7 +677,7 @@ fn light_pdfs_integrate_to_the_light_choice() {
 fn mis_weights_of_both_strategies_sum_to_one() {
     let scene = common::shipped("cornell-box");
     let mut rng = SmallRng::seed_from_u64(common::seed(3));
-    let mut checked = [[0usize; 3]; 9];
+    let mut checked = [[0usize; 3]; 12];
     let cam = vrpt::camera::Camera::new(&scene.camera, 64, 64).unwrap();
     let samplers: Vec<_> = POINTS
         .iter()

@@ -421,6 +421,7 @@ fn shipped_cornell_box_agrees_for_every_light_strategy() {
         Strategy::of(Independent, Directions::Cosine, LightStrategy::Nee),
         with_points(nee, LightPoints::Area),
         with_points(nee, LightPoints::SolidAngle),
+        with_points(nee, LightPoints::Projected),
         with_points(
             Strategy::of(Stratified, Directions::Phong, LightStrategy::Mis),
             LightPoints::Area,
@@ -453,6 +454,7 @@ fn shipped_cornell_box_agrees_for_every_light_strategy() {
         LightPoints::Area,
         LightPoints::SolidAngle,
         LightPoints::Projected,
+        LightPoints::Auto,
     ] {
         let strategy = with_points(nee, points);
         let t = region_z_test(

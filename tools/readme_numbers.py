@@ -24,7 +24,9 @@ import tempfile
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 VRPT = str(ROOT / "target/release/vrpt")
-WORK = pathlib.Path(tempfile.mkdtemp(prefix="vrpt-numbers-"))
+# References are rendered once per run into WORK; VRPT_NUMBERS_WORK=DIR keeps them across runs.
+WORK = pathlib.Path(os.environ.get("VRPT_NUMBERS_WORK") or tempfile.mkdtemp(prefix="vrpt-numbers-"))
+WORK.mkdir(parents=True, exist_ok=True)
 SECTIONS = {}
 
 
@@ -208,7 +210,7 @@ def lights():
     """Points on a light (area, solid angle, projected solid angle) on the Cornell box and
     lit-checker, and the choice of light (uniform, power, tree) on the night hall and the glossy
     plates, at equal spp and equal time; and what a light sample costs (the `lights` bench)."""
-    points = ("area", "solid-angle", "projected")
+    points = ("area", "solid-angle", "projected", "auto")
     cases = [("scenes/cornell-box", cached_render("cb-ref", "scenes/cornell-box", "--spp", 4096, "--seed", 77),
               "stratified+phong+mis", "cb-ref.exr"),
              ("scenes/lit-checker",
@@ -258,6 +260,81 @@ def lights():
         ns = float(value) * {"ns": 1, "µs": 1e3, "us": 1e3, "ms": 1e6}[unit] / 4096
         rows.append([name, f"{ns:.0f}"])
     print(table(["operation", "ns per receiver"], rows))
+
+
+# The shipped scenes at a size where every reference takes seconds: (scene, width, height).
+EFFICIENCY_SCENES = [("cornell-box", 128, 128), ("glossy-plates", 128, 96), ("lit-checker", 128, 96),
+                     ("checker-plane", 128, 96), ("night-hall", 128, 72), ("door", 128, 96),
+                     ("sun-sky", 128, 96), ("textured", 128, 96)]
+# The default, then one axis changed at a time: (label, extra flags of `vrpt render`).
+EFFICIENCY_CONFIGS = [("default", []), ("--replicates 4", ["--replicates", 4]),
+                      ("--sampler sobol", ["--sampler", "sobol"]),
+                      ("--sampler independent", ["--sampler", "independent"]),
+                      ("--lights nee", ["--lights", "nee"]),
+                      ("--light-points area", ["--light-points", "area"]),
+                      ("--light-points projected", ["--light-points", "projected"]),
+                      ("--light-choice power", ["--light-choice", "power"])]
+
+
+def efficiency_ref(scene, w, h, spp=4096):
+    """An independent-points reference: its per-sample variance of the mean is unbiased, so it
+    is the floor that `vrpt diff` prints ("reference variance") and the measured MSE sheds.
+    Solid-angle points (not area): an environment map is then sampled by its luminance."""
+    return cached_render(f"eff-{scene}-{w}x{h}", f"scenes/{scene}", "--width", w, "--height", h, "--spp", spp,
+                         "--sampler", "independent", "--light-points", "solid-angle", "--light-choice", "power",
+                         "--seed", 4242)
+
+
+def measure_efficiency(configs, scenes=EFFICIENCY_SCENES, spp=64, seeds=(1, 2, 3, 4, 5), env=None):
+    """{(scene, label): (MSE, seconds)}: each config's MSE against the scene's reference (mean over
+    seeds, the reference's own variance subtracted) and its render time (median), the configs
+    interleaved seed by seed (A B C ... A B C ...) so a drifting machine costs every config alike.
+    `env`: optional {label: environment overrides}."""
+    out = {}
+    for scene, w, h in scenes:
+        ref = efficiency_ref(scene, w, h)
+        got = {label: ([], []) for label, _ in configs}
+        for seed in seeds:
+            for label, flags in configs:
+                img = WORK / "eff.exr"
+                e = dict(os.environ, **(env or {}).get(label, {}))
+                r = run([VRPT, "render", f"scenes/{scene}", "--width", str(w), "--height", str(h), "--spp", str(spp),
+                         "--seed", str(seed), *map(str, flags), "-o", str(img)], env=e)
+                secs = float(re.search(r" in ([0-9.]+) s", r.stderr).group(1))
+                d = vrpt("diff", img, ref).stdout
+                mse = float(re.search(r"^MSE\s+(\S+)", d, re.M).group(1))
+                floor = float(re.search(r"^reference variance\s+(\S+)", d, re.M).group(1))
+                got[label][0].append(mse - floor)
+                got[label][1].append(secs)
+        for label, (m, t) in got.items():
+            out[(scene, label)] = (statistics.mean(m), statistics.median(t))
+    return out
+
+
+@section("efficiency")
+def efficiency():
+    """The defaults' choice: every shipped scene at 64 spp, the default strategy against one axis
+    changed at a time, by efficiency 1/(MSE × time) relative to the default."""
+    print("Every shipped scene (128 wide), 64 spp, seeds 1–5 interleaved, MSE against a 4096-spp "
+          "independent reference with its own variance subtracted; `vrpt render SCENE --width W --height H "
+          "--spp 64 --seed S [FLAGS]` then `vrpt diff`. Efficiency `1/(MSE × time)` relative to the defaults "
+          "(stratified+phong+mis, `--light-points auto`, `--light-choice tree`, one set of points); above 1 "
+          "would beat them:\n")
+    res = measure_efficiency(EFFICIENCY_CONFIGS)
+    labels = [l for l, _ in EFFICIENCY_CONFIGS]
+    rows, logs = [], {l: [] for l in labels}
+    for scene, _, _ in EFFICIENCY_SCENES:
+        m0, t0 = res[(scene, "default")]
+        row = [scene, f"{g(m0)}, {t0:.2f} s"]
+        for l in labels[1:]:
+            m, t = res[(scene, l)]
+            e = (m0 * t0) / (m * t)
+            logs[l].append(e)
+            row.append(f"{e:.2f}")
+        rows.append(row)
+    geo = lambda xs: statistics.geometric_mean(xs)
+    rows.append(["**geometric mean**", ""] + [f"**{geo(logs[l]):.2f}**" for l in labels[1:]])
+    print(table(["scene", "default: MSE, time"] + labels[1:], rows))
 
 
 @section("guiding")

@@ -7,7 +7,7 @@ use crate::error::{Error, Result};
 use crate::image_io::{check_image_path, Format};
 use crate::output::{write_render, EstimateRecord, RenderMetadata};
 use crate::render::{
-    render_passes, shard_range, PassPlan, Progress, RenderSettings, RenderStats, DEFAULT_REPLICATES,
+    render_passes, shard_range, PassPlan, Progress, RenderSettings, RenderStats, ACTING_REPLICATES,
 };
 use crate::scene::{self, Scene};
 use crate::strategy::Strategy;
@@ -56,8 +56,9 @@ pub struct ErrorArgs {
     /// Independent randomizations of every pixel, each a complete stratified or Sobol set of
     /// spp/R samples; their spread estimates the image's error honestly for every sampler
     /// (printed, and stored in an EXR as `estimated_variance.R/G/B` and `vrpt.estimated_rel_mse`).
-    /// 1: one set, the error then estimated per sample (s²/n, an overestimate for stratified
-    /// and Sobol points) [default: 4]
+    /// 1: one set, the error then estimated per sample (s²/n: unbiased for independent
+    /// points, an upper bound for stratified and Sobol points, which do better than
+    /// independent ones) [default: 1, or 4 with --adaptive or --target-error]
     #[arg(long, value_name = "R", value_parser = clap::value_parser!(u32).range(1..=256))]
     pub replicates: Option<u32>,
     /// Adaptive sampling: rounds of samples sent where the estimated relative error is, the
@@ -177,7 +178,13 @@ impl RenderRequest {
             threads: self.threads,
             time_traces: self.time_traces,
             guide_pdf_scale: 1.0,
-            replicates: self.error.replicates.unwrap_or(DEFAULT_REPLICATES),
+            replicates: self.error.replicates.unwrap_or(
+                if self.error.adaptive || self.error.target_error.is_some() {
+                    ACTING_REPLICATES
+                } else {
+                    1
+                },
+            ),
         };
         let plan = PassPlan {
             pass_spp: self.pass_spp.or((self.time_limit.is_some()
