@@ -12,7 +12,7 @@ use vrpt::commands::experiment::{CompareRequest, ConvergeRequest, Experiment, Ex
 use vrpt::commands::{diff, merge, render, Written};
 use vrpt::error::{Error, Result};
 use vrpt::lights::{LightChoice, LightPoints, LightStrategy};
-use vrpt::output::{parse_seconds, parse_shard};
+use vrpt::output::{parse_exposure, parse_seconds, parse_shard};
 use vrpt::render::Progress;
 use vrpt::sampler::SamplerKind;
 use vrpt::strategy::{Preset, Strategy};
@@ -124,8 +124,8 @@ pub struct RenderArgs {
     pub strategy: StrategyArgs,
     #[command(flatten)]
     pub error: render::ErrorArgs,
-    /// Exposure of the PNG, in stops (pixels × 2^EXPOSURE before tone mapping).
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    /// Exposure of the PNG, in stops (pixels × 2^EXPOSURE before tone mapping), within ±64.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = parse_exposure)]
     pub exposure: f32,
     /// Also write the per-pixel variance of the mean to this EXR.
     #[arg(long, value_name = "EXR")]
@@ -240,8 +240,8 @@ pub struct CompareArgs {
     /// Write a PNG grid: per strategy its first run's image and error map.
     #[arg(long, value_name = "PNG")]
     pub grid: Option<PathBuf>,
-    /// Exposure of the images in the grid, in stops.
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    /// Exposure of the images in the grid, in stops, within ±64.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = parse_exposure)]
     pub exposure: f32,
     #[command(flatten)]
     pub regions: RegionArgs,

@@ -157,6 +157,10 @@ pub enum Method {
     /// From the samples' variance, `s²/n`: exact for independent samples, an overestimate for
     /// stratified and Sobol ones (fewer than two replicates held samples).
     PerSample,
+    /// No estimate: fewer than two replicates, and a pixel with fewer than two samples, whose
+    /// variance one sample cannot tell (it is undefined, not zero). Its MSE and relMSE are NaN,
+    /// so no target is ever reached on it.
+    Undefined,
 }
 
 impl Method {
@@ -165,6 +169,7 @@ impl Method {
         match self {
             Method::Replicates(_) => "replicates",
             Method::PerSample => "per-sample",
+            Method::Undefined => "undefined",
         }
     }
 }
@@ -196,7 +201,7 @@ impl ErrorEstimate {
     }
 
     /// From replicates where at least two hold samples of every pixel, else per sample from
-    /// `film`.
+    /// `film` where every pixel holds two samples or more, else [`Method::Undefined`].
     pub fn of(replicates: &Replicates, film: &Film) -> Self {
         let mean: Vec<Vec3> = (0..film.len()).map(|i| film.mean(i).as_vec3()).collect();
         if replicates.filled() >= 2 {
@@ -209,8 +214,15 @@ impl ErrorEstimate {
                 &mean,
                 v,
             )
-        } else {
+        } else if (0..film.len()).all(|i| film.count(i) >= 2) {
             ErrorEstimate::new(Method::PerSample, film.width, &mean, film.variance_image())
+        } else {
+            ErrorEstimate {
+                method: Method::Undefined,
+                variance: vec![Vec3::NAN; film.len()],
+                mse: f64::NAN,
+                rel_mse: f64::NAN,
+            }
         }
     }
 
@@ -221,6 +233,11 @@ impl ErrorEstimate {
             Method::PerSample => {
                 "per sample (s²/n: one set of points; an upper bound for stratified and Sobol points, \
                  --replicates 4 for an honest estimate)"
+                    .into()
+            }
+            Method::Undefined => {
+                return "estimated error: undefined (a pixel holds fewer than two samples and \
+                        there are fewer than two replicates)\n"
                     .into()
             }
         };

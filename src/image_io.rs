@@ -246,6 +246,53 @@ pub fn check_writable(path: &Path) -> Result<()> {
     Ok(())
 }
 
+/// What `path` names, for telling whether two paths are one file: canonical where it exists
+/// (symlinks, `./` and `..` resolved), else its folder's canonical path joined with its name.
+fn file_key(path: &Path) -> PathBuf {
+    if let Ok(c) = path.canonicalize() {
+        return c;
+    }
+    let dir = path
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    match (dir.canonicalize(), path.file_name()) {
+        (Ok(d), Some(name)) => d.join(name),
+        _ => path.to_path_buf(),
+    }
+}
+
+/// A path with the flag (or argument) that named it, for errors: `("-o", path)`.
+pub type NamedPath<'a> = (&'a str, &'a Path);
+
+/// Refuse, before any work, a command whose outputs name one file twice or name one of its
+/// inputs: `outputs` and `inputs` are `(flag, path)` pairs, compared by canonical path, and the
+/// error names both flags. (Every output is written by renaming a temporary file over it, so a
+/// clash would silently destroy the other file.)
+pub fn check_outputs(outputs: &[NamedPath], inputs: &[NamedPath]) -> Result<()> {
+    let outs: Vec<(&str, &Path, PathBuf)> =
+        outputs.iter().map(|&(f, p)| (f, p, file_key(p))).collect();
+    let ins: Vec<(&str, &Path, PathBuf)> =
+        inputs.iter().map(|&(f, p)| (f, p, file_key(p))).collect();
+    for (k, (flag, path, key)) in outs.iter().enumerate() {
+        if let Some((f, p, _)) = outs[..k].iter().find(|o| o.2 == *key) {
+            return Err(Error::Settings(format!(
+                "{f} {} and {flag} {} are the same file: one would overwrite the other",
+                p.display(),
+                path.display()
+            )));
+        }
+        if let Some((f, p, _)) = ins.iter().find(|i| i.2 == *key) {
+            return Err(Error::Settings(format!(
+                "{flag} {} is the input {f} {}: writing it would destroy it",
+                path.display(),
+                p.display()
+            )));
+        }
+    }
+    Ok(())
+}
+
 /// Check that `path` names an image format vrpt writes and can be written; returns the format.
 pub fn check_image_path(path: &Path) -> Result<Format> {
     let f = Format::from_path(path)?;

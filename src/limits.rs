@@ -14,6 +14,26 @@ pub const MAX_SIDE: u32 = 65536;
 /// The longest path, as `--max-depth` allows.
 pub const MAX_DEPTH: u32 = 1024;
 
+/// The longest time a render or a run may be given, in seconds (`--time-limit`,
+/// `--equal-time`): 10⁷ s, about 116 days. Past it a value is refused (a float that large does
+/// not even become a `Duration`).
+pub const MAX_SECONDS: f64 = 1e7;
+
+/// `seconds` as a `Duration`, or the error naming `flag`: a positive, finite number of seconds
+/// at most [`MAX_SECONDS`].
+pub fn duration(flag: &str, seconds: f64) -> Result<std::time::Duration> {
+    if seconds > 0.0 && seconds <= MAX_SECONDS {
+        Ok(std::time::Duration::from_secs_f64(seconds))
+    } else {
+        Err(Error::Settings(format!(
+            "{flag} {seconds}: a time must be a positive number of seconds, at most {MAX_SECONDS:e}"
+        )))
+    }
+}
+
+/// The largest exposure, in stops either way (`--exposure`): 2⁶⁴ stays finite in f32.
+pub const MAX_EXPOSURE: f32 = 64.0;
+
 /// Bytes a render holds per pixel at its peak: the film's sums (2 × 24 B) and count (8 B), the
 /// tiles' sums before they reach the film (56 B), and the written image's RGB, variance and
 /// sample count (28 B) with the encoder's copy (≤ 28 B).

@@ -223,8 +223,10 @@ impl RenderMetadata {
         if let Some(e) = &self.estimate {
             put("replicates", e.replicates.to_string());
             put("error_estimate", e.method.clone());
-            put("estimated_mse", format!("{:e}", e.mse));
-            put("estimated_rel_mse", format!("{:e}", e.rel_mse));
+            if e.mse.is_finite() && e.rel_mse.is_finite() {
+                put("estimated_mse", format!("{:e}", e.mse));
+                put("estimated_rel_mse", format!("{:e}", e.rel_mse));
+            }
         }
         if let Some(r) = self.adaptive_rounds {
             put("adaptive", "true".into());
@@ -368,12 +370,17 @@ impl RenderMetadata {
             estimate: match opt::<u32>(a, "replicates")? {
                 None => None,
                 Some(replicates) => {
-                    let err = |k: &str| non_negative(a, k);
+                    // an undefined estimate has no numbers (NaN in memory)
+                    let method = req(a, "error_estimate")?.to_string();
+                    let err = |k: &str| match method.as_str() {
+                        "undefined" => Ok(f64::NAN),
+                        _ => non_negative(a, k),
+                    };
                     Some(EstimateRecord {
                         replicates,
-                        method: req(a, "error_estimate")?.to_string(),
                         mse: err("estimated_mse")?,
                         rel_mse: err("estimated_rel_mse")?,
+                        method,
                     })
                 }
             },
@@ -447,9 +454,23 @@ impl RenderMetadata {
 
 /// A flag's positive, finite number of seconds.
 pub fn parse_seconds(s: &str) -> std::result::Result<f64, String> {
+    use crate::limits::MAX_SECONDS;
     match s.parse::<f64>() {
-        Ok(x) if x > 0.0 && x.is_finite() => Ok(x),
-        _ => Err(format!("'{s}' is not a positive number of seconds")),
+        Ok(x) if x > 0.0 && x <= MAX_SECONDS => Ok(x),
+        _ => Err(format!(
+            "'{s}' is not a positive number of seconds up to {MAX_SECONDS:e}"
+        )),
+    }
+}
+
+/// An exposure in stops: a finite number within ±[`crate::limits::MAX_EXPOSURE`].
+pub fn parse_exposure(s: &str) -> std::result::Result<f32, String> {
+    use crate::limits::MAX_EXPOSURE;
+    match s.parse::<f32>() {
+        Ok(x) if x.abs() <= MAX_EXPOSURE => Ok(x),
+        _ => Err(format!(
+            "'{s}' is not an exposure in stops from -{MAX_EXPOSURE} to {MAX_EXPOSURE}"
+        )),
     }
 }
 
@@ -491,7 +512,9 @@ pub fn write_render(
     variance: Option<&Path>,
 ) -> Result<()> {
     let image = RgbImage {
-        estimated_variance: estimate.map(|e| e.variance.clone()),
+        estimated_variance: estimate
+            .filter(|e| e.method != crate::estimate::Method::Undefined)
+            .map(|e| e.variance.clone()),
         ..render_image(film, meta)
     };
     match Format::from_path(output)? {

@@ -491,6 +491,13 @@ pub fn render_passes_with<F: SamplerFactory>(
     if settings.replicates == 0 {
         return Err(Error::Settings("--replicates must be at least 1".into()));
     }
+    if settings.replicates > settings.spp {
+        // every replicate (and every adaptive round of it) takes at least one sample per pixel
+        return Err(Error::Settings(format!(
+            "--replicates {} needs at least {} spp (a sample per replicate), but --spp is {}",
+            settings.replicates, settings.replicates, settings.spp
+        )));
+    }
     if plan.adaptive && settings.replicates < 2 {
         return Err(Error::Settings(
             "--adaptive needs at least 2 replicates: it allocates from their spread".into(),

@@ -171,6 +171,11 @@ pub struct TextureSet {
 }
 
 impl TextureSet {
+    /// The files of the textures loaded (canonical where they could be resolved).
+    pub fn paths(&self) -> impl Iterator<Item = &Path> {
+        self.keys.iter().map(|(p, _)| p.as_path())
+    }
+
     /// The index of `path` decoded as `decode`, loading it at its first use.
     pub fn load(&mut self, path: &Path, decode: Decode) -> Result<u32> {
         let key = (

@@ -671,3 +671,205 @@ fn renders_state_their_error_and_adapt_on_request() {
         assert_one_line_error(&vrpt(&a), &args.join(" "), expect);
     }
 }
+
+/// Second review (issue 34): outputs never overwrite inputs or each other. Each clash is refused
+/// with one line naming both flags before any work, and the file it would have destroyed keeps
+/// its bytes; paths are compared canonically (`./x`, a symlink).
+#[test]
+fn outputs_never_overwrite_inputs_or_each_other() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    let scene = common::cornell_path();
+    let s = scene.to_str().unwrap();
+    // a small reference to compare against, and a texture scene to write over
+    let reference = d("ref.exr");
+    let out = vrpt(&[
+        "render", s, "--width", "8", "--height", "8", "--spp", "4", "-o", &reference,
+    ]);
+    assert!(out.status.success());
+    let before = std::fs::read(&reference).unwrap();
+    std::os::unix::fs::symlink(&reference, d("link.exr")).unwrap();
+    let dot = format!("{}/./ref.exr", dir.path().display());
+    let textured = common::shipped_path("textured");
+    let texture = textured.join("bricks.png");
+    let texture_bytes = std::fs::read(&texture).unwrap();
+    let small = ["--width", "8", "--height", "8", "--spp", "4"];
+    let (png, link, csv) = (d("a.png"), d("link.exr"), d("t.csv"));
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (
+            vec!["render", s, "-o", &reference, "--variance", &dot],
+            "--variance",
+        ),
+        (
+            vec!["render", s, "-o", &png, "--spp-map", &png],
+            "--spp-map",
+        ),
+        (
+            vec![
+                "render",
+                textured.to_str().unwrap(),
+                "-o",
+                texture.to_str().unwrap(),
+            ],
+            "the scene's file",
+        ),
+        (
+            vec!["compare", s, "--reference", &reference, "--csv", &link],
+            "--reference",
+        ),
+        (
+            vec![
+                "compare",
+                s,
+                "--reference",
+                &reference,
+                "--csv",
+                &csv,
+                "--json",
+                &csv,
+            ],
+            "--json",
+        ),
+        (vec!["merge", &reference, &reference, "-o", &link], "input"),
+        (
+            vec!["diff", &reference, &reference, "--error-map", &reference],
+            "--error-map",
+        ),
+    ];
+    for (mut args, expect) in cases {
+        if args[0] == "render" {
+            args.extend(small);
+        }
+        let what = args.join(" ");
+        assert_one_line_error(&vrpt(&args), &what, expect);
+        assert_eq!(
+            std::fs::read(&reference).unwrap(),
+            before,
+            "{what} touched the reference"
+        );
+    }
+    assert_eq!(std::fs::read(&texture).unwrap(), texture_bytes);
+}
+
+/// Second review (issue 34): every float flag refuses NaN, infinities and values past its
+/// documented maximum with one line, never a panic (a time of 1e20 s panicked converting to a
+/// Duration; `--exposure nan` was accepted).
+#[test]
+fn float_flags_refuse_nan_inf_and_huge_values() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = common::cornell_path();
+    let s = scene.to_str().unwrap();
+    let out = dir.path().join("x.exr");
+    let o = out.to_str().unwrap();
+    for (flag, value) in [
+        ("--time-limit", "1e20"),
+        ("--time-limit", "1e300"),
+        ("--time-limit", "inf"),
+        ("--time-limit", "nan"),
+        ("--exposure", "nan"),
+        ("--exposure", "inf"),
+        ("--exposure", "-inf"),
+        ("--exposure", "1e300"),
+        ("--target-error", "nan"),
+        ("--target-error", "inf"),
+    ] {
+        let pair = format!("{flag}={value}");
+        let args = ["render", s, "--width", "8", "--height", "8", "-o", o, &pair];
+        assert_one_line_error(&vrpt(&args), &pair, flag);
+        assert!(!out.exists());
+    }
+    let r = dir.path().join("r.exr");
+    let r = r.to_str().unwrap();
+    let made = vrpt(&[
+        "render", s, "--width", "8", "--height", "8", "--spp", "4", "-o", r,
+    ]);
+    assert!(made.status.success());
+    for value in ["1e20", "inf", "nan"] {
+        let args = [
+            "compare",
+            s,
+            "--reference",
+            r,
+            "--runs",
+            "2",
+            "--equal-time",
+            value,
+        ];
+        assert_one_line_error(
+            &vrpt(&args),
+            &format!("--equal-time {value}"),
+            "--equal-time",
+        );
+    }
+    let args = [
+        "compare",
+        s,
+        "--reference",
+        r,
+        "--runs",
+        "2",
+        "--exposure",
+        "nan",
+    ];
+    assert_one_line_error(&vrpt(&args), "compare --exposure nan", "--exposure");
+}
+
+/// Second review (issue 34): an error estimate from one sample and one replicate is undefined,
+/// never zero, and `--target-error` never stops on it (it stopped at 1 spp claiming relMSE 0);
+/// more replicates than samples are refused naming both numbers (`--adaptive --spp 5
+/// --replicates 256` rendered 256 spp).
+#[test]
+fn one_sample_claims_no_error_and_replicates_need_their_samples() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = common::cornell_path();
+    let s = scene.to_str().unwrap();
+    let exr = dir.path().join("x.exr");
+    let o = exr.to_str().unwrap();
+    let small = ["render", s, "--width", "8", "--height", "8", "-o", o];
+    let mut a = small.to_vec();
+    a.extend([
+        "--replicates",
+        "1",
+        "--pass-spp",
+        "1",
+        "--target-error",
+        "1e-9",
+        "--spp",
+        "4",
+    ]);
+    let out = vrpt(&a);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let img = vrpt::image_io::read_exr(&exr).unwrap();
+    let meta = vrpt::output::RenderMetadata::require(&img, &exr).unwrap();
+    assert_eq!(
+        meta.spp, 4,
+        "a target of 1e-9 is not reached: the render runs to --spp"
+    );
+    let mut a = small.to_vec();
+    a.extend(["--replicates", "1", "--spp", "1"]);
+    let out = vrpt(&a);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        out.status.success() && err.contains("estimated error: undefined"),
+        "{err}"
+    );
+    let img = vrpt::image_io::read_exr(&exr).unwrap();
+    let e = vrpt::output::RenderMetadata::require(&img, &exr)
+        .unwrap()
+        .estimate
+        .unwrap();
+    assert_eq!(e.method, "undefined");
+    assert!(e.rel_mse.is_nan() && img.estimated_variance.is_none());
+    for extra in [
+        vec!["--adaptive", "--spp", "5", "--replicates", "256"],
+        vec!["--spp", "3", "--replicates", "4"],
+    ] {
+        let mut a = small.to_vec();
+        a.extend(extra.iter());
+        assert_one_line_error(&vrpt(&a), &extra.join(" "), "needs at least");
+    }
+}

@@ -11,13 +11,14 @@ use crate::analysis::metrics::Region;
 use crate::analysis::plots::{convergence_svg, write_comparison_grid, write_convergence_plot};
 use crate::analysis::report::Report;
 use crate::error::{Error, Result};
-use crate::image_io::{check_image_path, check_writable, read_exr, write_bytes, RgbImage};
+use crate::image_io::{
+    check_image_path, check_writable, read_exr, write_bytes, NamedPath, RgbImage,
+};
 use crate::output::RenderMetadata;
 use crate::render::Progress;
 use crate::scene::{self, Scene};
 use crate::strategy::Strategy;
 use std::path::PathBuf;
-use std::time::Duration;
 
 /// What both experiments share: the scene, the reference, the strategies and runs, and the
 /// files to write.
@@ -127,10 +128,31 @@ pub trait Experiment {
     fn run(self, progress: &dyn Progress) -> Result<Outcome<Self::Result>>;
 }
 
-fn prepare_common(a: &ExperimentRequest) -> Result<(Scene, RgbImage, ExperimentSettings)> {
+/// Check an experiment's files, load its scene and reference: `more` are the command's own
+/// outputs and inputs (a grid, plots, a regions file), checked with the shared ones for
+/// clashes before any work.
+fn prepare_common(
+    a: &ExperimentRequest,
+    more: (&[NamedPath], &[NamedPath]),
+) -> Result<(Scene, RgbImage, ExperimentSettings)> {
     for p in [&a.csv, &a.json, &a.report].into_iter().flatten() {
         check_writable(p)?;
     }
+    let mut outputs: Vec<NamedPath> = [
+        ("--csv", &a.csv),
+        ("--json", &a.json),
+        ("--report", &a.report),
+    ]
+    .into_iter()
+    .filter_map(|(f, p)| p.as_deref().map(|p| (f, p)))
+    .collect();
+    outputs.extend_from_slice(more.0);
+    let mut inputs = vec![
+        ("SCENE", a.scene.as_path()),
+        ("--reference", a.reference.as_path()),
+    ];
+    inputs.extend_from_slice(more.1);
+    crate::image_io::check_outputs(&outputs, &inputs)?;
     if a.strategies.is_empty() {
         return Err(Error::Settings("no strategies to run".into()));
     }
@@ -205,7 +227,22 @@ impl CompareRequest {
         if let Some(g) = &self.grid {
             check_image_path(g)?;
         }
-        let (scene, reference, mut settings) = prepare_common(&self.experiment)?;
+        if let Some(t) = self.equal_time {
+            crate::limits::duration("--equal-time", t)?;
+        }
+        let grid: Vec<NamedPath> = self
+            .grid
+            .as_deref()
+            .map(|g| ("--grid", g))
+            .into_iter()
+            .collect();
+        let regions: Vec<NamedPath> = self
+            .regions_file
+            .as_deref()
+            .map(|r| ("--regions", r))
+            .into_iter()
+            .collect();
+        let (scene, reference, mut settings) = prepare_common(&self.experiment, (&grid, &regions))?;
         settings.regions = resolve_regions(
             &self.regions,
             self.regions_file.as_deref(),
@@ -241,7 +278,9 @@ impl Experiment for Prepared<CompareRequest> {
             &self.reference,
             &a.entries()?,
             req.spp,
-            req.equal_time.map(Duration::from_secs_f64),
+            req.equal_time
+                .map(|t| crate::limits::duration("--equal-time", t))
+                .transpose()?,
             &self.settings,
             progress,
         )?;
@@ -310,7 +349,8 @@ impl ConvergeRequest {
                 "--spp needs at least two sample counts".into(),
             ));
         }
-        let (scene, reference, settings) = prepare_common(&self.experiment)?;
+        let plots: Vec<NamedPath> = self.plots.iter().map(|p| ("--plot", p.as_path())).collect();
+        let (scene, reference, settings) = prepare_common(&self.experiment, (&plots, &[]))?;
         Ok(Prepared {
             request: self,
             scene,

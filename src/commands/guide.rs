@@ -143,7 +143,13 @@ pub fn run(req: &GuideRequest) -> Result<GuideOutcome> {
         )));
     }
     check_writable(&req.output)?;
+    crate::image_io::check_outputs(&[("-o", &req.output)], &[("SCENE", &req.scene)])?;
     let scene = scene::load(&req.scene)?;
+    let read: Vec<crate::image_io::NamedPath> = std::iter::once(scene.source.as_path())
+        .chain(scene.files.iter().map(|p| p.as_path()))
+        .map(|p| ("the scene's file", p))
+        .collect();
+    crate::image_io::check_outputs(&[("-o", &req.output)], &read)?;
     let base = RenderSettings::for_scene(&scene);
     let settings = RenderSettings {
         width: req.width.unwrap_or(base.width),

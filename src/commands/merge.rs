@@ -3,7 +3,7 @@
 
 use crate::analysis::merge::{merge, MergeInput};
 use crate::error::{Error, Result};
-use crate::image_io::{check_image_path, write_exr, Format};
+use crate::image_io::{check_image_path, check_outputs, write_exr, Format};
 use std::path::PathBuf;
 
 /// The renders to merge and the EXR to write.
@@ -24,6 +24,9 @@ pub struct MergeOutcome {
 
 /// Read the inputs, merge them and write the result.
 pub fn run(req: &MergeRequest) -> Result<MergeOutcome> {
+    let inputs: Vec<crate::image_io::NamedPath> =
+        req.inputs.iter().map(|p| ("input", p.as_path())).collect();
+    check_outputs(&[("-o", &req.output)], &inputs)?;
     if check_image_path(&req.output)? != Format::Exr {
         return Err(Error::Settings(format!(
             "-o {}: a merge is written as .exr",

@@ -4,7 +4,7 @@
 
 use crate::analysis::plots::write_spp_map;
 use crate::error::{Error, Result};
-use crate::image_io::{check_image_path, Format};
+use crate::image_io::{check_image_path, check_outputs, Format, NamedPath};
 use crate::output::{write_render, EstimateRecord, RenderMetadata};
 use crate::render::{
     render_passes, shard_range, PassPlan, Progress, RenderSettings, RenderStats, ACTING_REPLICATES,
@@ -159,9 +159,29 @@ impl RenderRequest {
                 )));
             }
         }
+        let outputs: Vec<NamedPath> = [
+            ("-o", Some(output.as_path())),
+            ("--variance", self.variance.as_deref()),
+            ("--spp-map", self.error.spp_map.as_deref()),
+        ]
+        .into_iter()
+        .filter_map(|(f, p)| p.map(|p| (f, p)))
+        .collect();
+        let toml = self.scene.join("scene.toml");
+        let mut inputs = vec![("SCENE", self.scene.as_path())];
+        if self.scene.is_dir() {
+            inputs.push(("SCENE", toml.as_path()));
+        }
+        check_outputs(&outputs, &inputs)?;
         let start = Instant::now();
         let scene = scene::load(&self.scene)?;
         let load_time = start.elapsed();
+        // and the files the scene was read from: its OBJ, environment map and textures
+        let read: Vec<NamedPath> = std::iter::once(scene.source.as_path())
+            .chain(scene.files.iter().map(PathBuf::as_path))
+            .map(|p| ("the scene's file", p))
+            .collect();
+        check_outputs(&outputs, &read)?;
         let d = RenderSettings::for_scene(&scene);
         let settings = RenderSettings {
             width: self.width.unwrap_or(d.width),
@@ -190,7 +210,10 @@ impl RenderRequest {
             pass_spp: self.pass_spp.or((self.time_limit.is_some()
                 || self.error.target_error.is_some())
             .then(|| 16.min(settings.spp))),
-            time_limit: self.time_limit.map(Duration::from_secs_f64),
+            time_limit: self
+                .time_limit
+                .map(|t| crate::limits::duration("--time-limit", t))
+                .transpose()?,
             shard: self.shard,
             stop: self.stop,
             adaptive: self.error.adaptive,

@@ -88,6 +88,9 @@ pub struct Scene {
     pub hash: u64,
     /// The materials' textures.
     pub textures: TextureSet,
+    /// The image files it was read from beyond the OBJ (`source`): the environment map and the
+    /// textures, so a command can refuse to write over them ([`load`] fills it).
+    pub files: Vec<PathBuf>,
     /// Whether a material has an opacity map (rays then test cutouts during traversal).
     cutouts: bool,
     /// Whether a material has a bump or normal map.
@@ -207,6 +210,7 @@ impl Scene {
             coloured: materials.iter().any(|m| m.maps.colour()),
             materials,
             textures: options.textures,
+            files: Vec::new(),
         })
     }
 
@@ -463,6 +467,10 @@ pub fn load(path: &Path) -> Result<Scene> {
         }
     };
     let (mesh, materials, textures, warnings) = obj::load_obj(&obj_path)?;
+    let desc_env_file: Option<PathBuf> = desc.as_ref().and_then(|(d, toml)| {
+        let map = d.environment.as_ref()?.map.as_ref()?;
+        Some(toml.parent().unwrap_or(Path::new(".")).join(map.get_ref()))
+    });
     let options = match desc {
         Some((d, toml)) => SceneOptions {
             camera: d.camera.map(|c| CameraDesc {
@@ -480,7 +488,13 @@ pub fn load(path: &Path) -> Result<Scene> {
             ..SceneOptions::default()
         },
     };
-    Scene::build(obj_path, mesh, materials, options, warnings)
+    let env_file = desc_env_file.clone();
+    let mut scene = Scene::build(obj_path, mesh, materials, options, warnings)?;
+    scene.files = env_file
+        .into_iter()
+        .chain(scene.textures.paths().map(Path::to_path_buf))
+        .collect();
+    Ok(scene)
 }
 
 /// The environment of a description's `[environment]` (validated by
