@@ -211,6 +211,21 @@ impl EnvMap {
             ));
         }
         let texels: Vec<Vec3> = pixels.iter().map(|&p| p * scale).collect();
+        // the scale may carry a texel past what sums of squared radiance keep finite
+        let max = crate::limits::MAX_MAGNITUDE;
+        if let Some(k) = texels
+            .iter()
+            .position(|t| !t.is_finite() || t.max_element() > max)
+        {
+            return Err(format!(
+                "pixel ({}, {}) is {} : times the scale {scale} it is {}, above the largest \
+                 radiance vrpt takes ({max:e})",
+                k % w,
+                k / w,
+                pixels[k],
+                texels[k]
+            ));
+        }
         let mut rows = Vec::with_capacity(h);
         let mut luminance_integral = 0.0f64;
         for y in 0..h {

@@ -48,16 +48,63 @@ fn available_memory() -> Option<u64> {
     Some(kib * 1024)
 }
 
-/// Refuse an image whose buffers cannot be allocated, before allocating any of them (an
-/// allocation failure aborts the process, with no error line).
-pub fn check_memory(width: u32, height: u32) -> Result<()> {
-    let need = width as u64 * height as u64 * BYTES_PER_PIXEL;
+/// Bytes a render holds per pixel and replicate beyond [`BYTES_PER_PIXEL`]: each replicate's
+/// weighted sum (24 B) and weight (8 B), and an adaptive round's film of it (56 B).
+pub const BYTES_PER_REPLICATE_PIXEL: u64 = 32 + 56;
+
+/// Bytes a texture or environment map holds per texel while it loads: the decoder's image
+/// (at most 8 B: 16-bit RGBA), its RGBA8 copy (4 B) and the linear RGBA f32 texels kept for
+/// rendering (16 B); an environment map's sampling tables (≤ 12 B) come after the decoder's
+/// buffers are gone.
+pub const TEXTURE_BYTES_PER_TEXEL: u64 = 28;
+
+/// The most texels a texture or an environment map may declare: 2²⁸ (16384², about 7.5 GB
+/// while it loads). A header past it is refused before anything is decoded.
+pub const MAX_TEXELS: u64 = 1 << 28;
+
+/// Refuse `need` bytes for `what` when the system cannot give them, before allocating any of
+/// them (an allocation failure aborts the process, with no error line): the one memory check
+/// every buffer that grows with the input passes.
+pub fn check_bytes(what: &str, need: u64) -> Result<()> {
     match available_memory() {
         Some(have) if need > have => Err(Error::Settings(format!(
-            "a {width}x{height} image needs about {:.1} GiB of memory; {:.1} GiB are available",
+            "{what} needs about {:.1} GiB of memory; {:.1} GiB are available",
             need as f64 / (1u64 << 30) as f64,
             have as f64 / (1u64 << 30) as f64
         ))),
         _ => Ok(()),
     }
+}
+
+/// Refuse an image whose buffers cannot be allocated, before allocating any of them.
+pub fn check_memory(width: u32, height: u32) -> Result<()> {
+    check_render_memory(width, height, 1)
+}
+
+/// Refuse a render of `replicates` replicates whose buffers cannot be allocated: the image's
+/// per-pixel bytes and each replicate's ([`BYTES_PER_REPLICATE_PIXEL`]).
+pub fn check_render_memory(width: u32, height: u32, replicates: u32) -> Result<()> {
+    let pixels = width as u64 * height as u64;
+    let need = pixels * BYTES_PER_PIXEL + pixels * replicates as u64 * BYTES_PER_REPLICATE_PIXEL;
+    let what = match replicates {
+        0 | 1 => format!("a {width}x{height} image"),
+        r => format!("a {width}x{height} image in {r} replicates"),
+    };
+    check_bytes(&what, need)
+}
+
+/// Refuse a texture or environment map of `width`×`height` texels from its header: more than
+/// [`MAX_TEXELS`], or more memory than the system can give.
+pub fn check_texels(width: u64, height: u64) -> std::result::Result<(), String> {
+    let texels = width.saturating_mul(height);
+    if texels > MAX_TEXELS {
+        return Err(format!(
+            "its header declares {width}x{height} texels, more than the {MAX_TEXELS} vrpt reads"
+        ));
+    }
+    check_bytes(
+        &format!("a {width}x{height} texture"),
+        texels * TEXTURE_BYTES_PER_TEXEL,
+    )
+    .map_err(|e| e.to_string())
 }

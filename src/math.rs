@@ -57,11 +57,41 @@ pub fn mix64(mut z: u64) -> u64 {
 /// Hash of several words, order-sensitive.
 #[inline]
 pub fn hash_words(words: &[u64]) -> u64 {
-    let mut h = 0x9e37_79b9_7f4a_7c15u64;
-    for &w in words {
-        h = mix64(h ^ w.wrapping_add(0x9e37_79b9_7f4a_7c15));
+    let mut h = WordHash::default();
+    h.extend(words.iter().copied());
+    h.finish()
+}
+
+/// [`hash_words`] fed a word at a time (the same value for the same words), so a long sequence
+/// (every texel of a texture) needs no buffer.
+#[derive(Clone, Copy, Debug)]
+pub struct WordHash(u64);
+
+impl Default for WordHash {
+    fn default() -> Self {
+        WordHash(0x9e37_79b9_7f4a_7c15)
     }
-    h
+}
+
+impl WordHash {
+    /// Add one word.
+    #[inline]
+    pub fn push(&mut self, w: u64) {
+        self.0 = mix64(self.0 ^ w.wrapping_add(0x9e37_79b9_7f4a_7c15));
+    }
+
+    /// The hash of the words so far.
+    pub fn finish(&self) -> u64 {
+        self.0
+    }
+}
+
+impl Extend<u64> for WordHash {
+    fn extend<I: IntoIterator<Item = u64>>(&mut self, words: I) {
+        for w in words {
+            self.push(w);
+        }
+    }
 }
 
 /// The top 24 bits of a hash as a float in [0, 1): every value exactly representable.

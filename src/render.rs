@@ -290,7 +290,7 @@ fn camera_for(scene: &Scene, settings: &RenderSettings) -> Result<Camera> {
             u32::MAX
         )));
     }
-    crate::limits::check_memory(settings.width, settings.height)?;
+    crate::limits::check_render_memory(settings.width, settings.height, settings.replicates)?;
     Camera::new(&scene.camera, settings.width, settings.height).ok_or_else(|| {
         Error::Settings(format!(
             "degenerate camera (eye {}, target {}, up {}, fov {}°)",

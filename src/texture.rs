@@ -80,6 +80,20 @@ impl Texture {
             .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
         if is_exr {
             let img = crate::image_io::read_exr(path)?;
+            // read_exr refuses non-finite pixels; a texture's values are reflectances,
+            // exponents, heights: never negative (they made negative radiance)
+            if let Some(k) = img.pixels.iter().position(|p| p.min_element() < 0.0) {
+                let w = img.width as usize;
+                return Err(Error::ImageRead {
+                    path: path.to_path_buf(),
+                    message: format!(
+                        "texel ({}, {}) is {}: a texture's values must not be negative",
+                        k % w,
+                        k / w,
+                        img.pixels[k]
+                    ),
+                });
+            }
             let texels = img.pixels.iter().map(|p| p.extend(1.0)).collect();
             return Ok(Texture::new(img.width, img.height, texels, false));
         }
@@ -88,10 +102,24 @@ impl Texture {
                 path: path.to_path_buf(),
             });
         }
-        let img = image::open(path).map_err(|e| Error::ImageRead {
+        let err = |message: String| Error::ImageRead {
             path: path.to_path_buf(),
-            message: e.to_string(),
-        })?;
+            message,
+        };
+        let open = || {
+            image::ImageReader::open(path)
+                .and_then(|r| r.with_guessed_format())
+                .map_err(|e| err(e.to_string()))
+        };
+        // the header's size first: a few kilobytes can declare gigabytes of texels
+        let (w, h) = open()?.into_dimensions().map_err(|e| err(e.to_string()))?;
+        crate::limits::check_texels(w as u64, h as u64).map_err(err)?;
+        let mut reader = open()?;
+        let mut limits = image::Limits::default();
+        limits.max_alloc =
+            Some(w as u64 * h as u64 * crate::limits::TEXTURE_BYTES_PER_TEXEL + (1 << 20));
+        reader.limits(limits);
+        let img = reader.decode().map_err(|e| err(e.to_string()))?;
         let alpha = img.color().has_alpha();
         let rgba = img.to_rgba8();
         let (w, h) = rgba.dimensions();

@@ -5,6 +5,7 @@
 
 mod common;
 
+use glam::Vec3;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -589,4 +590,137 @@ fn huge_header(dir: &Path, a: &Path) -> PathBuf {
     let p = dir.join("huge.exr");
     std::fs::write(&p, bytes).unwrap();
     p
+}
+
+/// A 4×4 PNG whose header is rewritten to declare `w`×`h` pixels (its IHDR checksum fixed, so
+/// only the size lies): a few hundred bytes that declare gigabytes.
+fn lying_png(dir: &Path, name: &str, w: u32, h: u32) -> PathBuf {
+    let p = dir.join(name);
+    image::RgbImage::from_pixel(4, 4, image::Rgb([200, 100, 50]))
+        .save(&p)
+        .unwrap();
+    let mut bytes = std::fs::read(&p).unwrap();
+    assert_eq!(&bytes[12..16], b"IHDR");
+    bytes[16..20].copy_from_slice(&w.to_be_bytes());
+    bytes[20..24].copy_from_slice(&h.to_be_bytes());
+    let mut crc = flate2::Crc::new();
+    crc.update(&bytes[12..29]);
+    bytes[29..33].copy_from_slice(&crc.sum().to_be_bytes());
+    std::fs::write(&p, bytes).unwrap();
+    p
+}
+
+/// Second review (issue 34): images read as textures or environment maps are checked by the
+/// size their header declares before anything is decoded (a 59 KB PNG made vrpt abort
+/// allocating 7.7 GB), and their values by what they mean: a negative texel in an EXR texture
+/// (it made negative radiance) and an environment map whose texel × scale leaves the radiance
+/// vrpt takes (1519 of 1536 samples were then dropped as non-finite) are refused at load,
+/// naming the file and the texel. One line each, no image.
+#[test]
+fn texture_and_environment_images_are_checked_at_load() {
+    use vrpt::image_io::{write_exr, RgbImage};
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let with_map = |file: &str| {
+        let line = format!("map_Kd {file}\n");
+        move |mtl: &str| mtl.replacen("Kd 0.7 0.7 0.7\n", &format!("Kd 0.7 0.7 0.7\n{line}"), 1)
+    };
+    lying_png(d, "huge.png", 40_000, 40_000);
+    let s = scene(d, "s.mtl", with_map("huge.png"));
+    assert_refused(
+        &render(&s),
+        "a 40000² PNG header",
+        &["huge.png", "40000x40000"],
+    );
+    let px = |v: Vec3| vec![v; 16];
+    let exr = |name: &str, pixels: Vec<Vec3>| {
+        let img = RgbImage {
+            width: 4,
+            height: 4,
+            pixels,
+            ..Default::default()
+        };
+        write_exr(&d.join(name), &img).unwrap();
+    };
+    let mut negative = px(Vec3::splat(0.5));
+    negative[6] = Vec3::new(0.5, -0.25, 0.5);
+    exr("neg.exr", negative);
+    let s = scene(d, "s.mtl", with_map("neg.exr"));
+    assert_refused(
+        &render(&s),
+        "a negative texel",
+        &["neg.exr", "(2, 1)", "negative"],
+    );
+    exr("sky.exr", px(Vec3::splat(1e10)));
+    let s = scene(d, "scene.toml", |t| {
+        t.replace(
+            "radiance = [0.1, 0.1, 0.1]",
+            "map = \"sky.exr\"\nscale = 1e10",
+        )
+    });
+    assert_refused(
+        &render(&s),
+        "texel × scale past the largest radiance",
+        &["sky.exr", "scale"],
+    );
+}
+
+/// Second review (issue 34): `merge` checks each input's sample counts against its metadata
+/// (no pixel above the file's spp, the counts adding up to spp × pixels less the dropped
+/// samples), naming the file and the first bad pixel; a file that lies would weigh its pixels
+/// wrong. And a render whose replicates cannot fit in memory is refused before allocating
+/// (2048² in 256 replicates aborted allocating 25.7 GB).
+#[test]
+fn merge_checks_the_sample_counts_and_replicates_count_in_memory() {
+    use vrpt::image_io::{read_exr, write_exr, RgbImage};
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let a = small_exr(d, "a.exr", "0");
+    let b = small_exr(d, "b.exr", "1");
+    let img = read_exr(&a).unwrap();
+    let m = d.join("m.exr");
+    for (name, k, count, expect) in [
+        ("over.exr", 5usize, 3u32, "pixel (1, 1) holds 3 samples"),
+        ("under.exr", 9, 1, "samples in all"),
+    ] {
+        let mut samples = img.samples.clone().unwrap();
+        samples[k] = count;
+        let p = d.join(name);
+        write_exr(
+            &p,
+            &RgbImage {
+                samples: Some(samples),
+                ..img.clone()
+            },
+        )
+        .unwrap();
+        let out = vrpt(&[
+            "merge",
+            p.to_str().unwrap(),
+            b.to_str().unwrap(),
+            "-o",
+            m.to_str().unwrap(),
+        ]);
+        assert_refused(&out, name, &[name, expect]);
+        assert!(!m.exists());
+    }
+    let out = vrpt(&[
+        "render",
+        common::cornell_path().to_str().unwrap(),
+        "--width",
+        "2048",
+        "--height",
+        "2048",
+        "--spp",
+        "256",
+        "--replicates",
+        "256",
+        "-o",
+        d.join("big.exr").to_str().unwrap(),
+    ]);
+    assert_refused(
+        &out,
+        "2048² in 256 replicates",
+        &["256 replicates", "memory"],
+    );
 }

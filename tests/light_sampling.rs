@@ -847,3 +847,41 @@ fn veach_picture_on_the_glossy_plates() {
         );
     }
 }
+
+/// Second review (issue 34): pairing emissive triangles into rectangles is linear in the
+/// triangles, however many share an edge. 100,000 coplanar triangles fanned around one edge
+/// (same emission and normal, so every pair passes the cheap tests): trying every pair, as
+/// before, is 5·10⁹ attempts (20,000 of them already added 5 s to a load), so this test would
+/// not finish; now each triangle tries at most `PAIR_CANDIDATES` per edge. None of them makes a
+/// rectangle with another; a real rectangle beside the fan still pairs.
+#[test]
+fn pairing_rectangles_is_linear_in_a_fan_of_emitters() {
+    let n = 100_000u32;
+    let le = Vec3::splat(2.0);
+    let mut tris: Vec<Emitter> = (0..n)
+        .map(|k| {
+            let y = 0.1 + k as f32 * 1e-4;
+            let v = [
+                Vec3::ZERO,
+                Vec3::X,
+                Vec3::new(0.3 + 0.4 * (k % 7) as f32 / 7.0, y, 0.0),
+            ];
+            Emitter::triangle(k, v, le)
+        })
+        .collect();
+    // a unit square at z = 1, its two halves sharing the diagonal (0,0)-(1,1)
+    let s = [
+        Vec3::new(0.0, 0.0, 1.0),
+        Vec3::new(1.0, 0.0, 1.0),
+        Vec3::new(1.0, 1.0, 1.0),
+        Vec3::new(0.0, 1.0, 1.0),
+    ];
+    tris.push(Emitter::triangle(n, [s[0], s[1], s[2]], le));
+    tris.push(Emitter::triangle(n + 1, [s[0], s[2], s[3]], le));
+    let lights = Lights::build(tris, n as usize + 2, Vec3::ZERO, 10.0).unwrap();
+    assert_eq!(
+        lights.len(),
+        n as usize + 1,
+        "the fan stays triangles, the square pairs"
+    );
+}

@@ -34,12 +34,61 @@ impl MergeInput {
     pub fn read(path: &std::path::Path) -> Result<MergeInput> {
         let image = crate::image_io::read_exr(path)?;
         let meta = RenderMetadata::require(&image, path)?;
+        check_counts(&image, &meta).map_err(|message| Error::ImageRead {
+            path: path.to_path_buf(),
+            message,
+        })?;
         Ok(MergeInput {
             path: path.to_path_buf(),
             image,
             meta,
         })
     }
+}
+
+/// A merge weighs each pixel by its `samples` channel, so the channel must agree with the
+/// metadata (`read_exr` has already checked that every count is a whole number and every
+/// variance finite and non-negative): no pixel holds more than the file's spp (an adaptive
+/// render does not merge), and the counts add up to the spp over every pixel less the
+/// non-finite samples dropped. The error names the first pixel that disagrees.
+fn check_counts(image: &RgbImage, meta: &RenderMetadata) -> std::result::Result<(), String> {
+    let Some(counts) = &image.samples else {
+        return Ok(());
+    };
+    let w = image.width as usize;
+    if meta.adaptive_rounds.is_none() {
+        if let Some(k) = counts.iter().position(|&n| n as u64 > meta.spp) {
+            return Err(format!(
+                "pixel ({}, {}) holds {} samples, more than the file's spp, {}",
+                k % w,
+                k / w,
+                counts[k],
+                meta.spp
+            ));
+        }
+    }
+    let sum: u64 = counts.iter().map(|&n| n as u64).sum();
+    let expected = (counts.len() as u64 * meta.spp).checked_sub(meta.nonfinite_samples);
+    if meta.adaptive_rounds.is_none() && Some(sum) != expected {
+        return Err(format!(
+            "its pixels hold {sum} samples in all, but its metadata says {} spp over {} pixels \
+             less {} non-finite samples dropped",
+            meta.spp,
+            counts.len(),
+            meta.nonfinite_samples
+        ));
+    }
+    if let Some(k) = counts.iter().position(|&n| n == 0) {
+        if image.pixels[k] != Vec3::ZERO {
+            return Err(format!(
+                "pixel ({}, {}) holds no samples but its value is {}",
+                k % w,
+                k / w,
+                image.pixels[k]
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Merge `inputs` into one image and its metadata.

@@ -522,7 +522,9 @@ fn environment(e: &description::EnvironmentSection, toml: &Path) -> Result<Envir
 /// the materials' maps, and the texels (only for scenes with textures, so the hash of a scene
 /// without them is what it always was).
 fn texture_hash(hash: u64, mesh: &Mesh, materials: &[Material], textures: &TextureSet) -> u64 {
-    let mut w: Vec<u64> = vec![hash];
+    // streamed: a buffer of the words took 32 bytes per texel
+    let mut w = crate::math::WordHash::default();
+    w.push(hash);
     let f = |x: f32| x.to_bits() as u64;
     for t in &mesh.triangles {
         if let Some(uv) = &t.uvs {
@@ -562,5 +564,5 @@ fn texture_hash(hash: u64, mesh: &Mesh, materials: &[Material], textures: &Textu
             }
         }
     }
-    hash_words(&w)
+    w.finish()
 }
