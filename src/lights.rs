@@ -885,8 +885,12 @@ struct TreeNode {
     leaf: bool,
 }
 
-/// The deepest the tree may grow (the trail's bits); past 48 levels splits are by count.
+/// The deepest the tree may grow: a light's path is one bit per level of a u64 trail.
 const MAX_TREE_DEPTH: u32 = 63;
+/// Past this depth splits halve by count, so the at most 2²⁴ lights below end within
+/// [`MAX_TREE_DEPTH`] (it was 48: an SAOH split that peels one light per level then left
+/// 70,000 lights to halve, 65 levels in all, and deep paths shared their last bit).
+const COUNT_SPLIT_DEPTH: u32 = MAX_TREE_DEPTH - 24;
 
 impl LightTree {
     /// The tree over `emitters` (at least one).
@@ -917,6 +921,23 @@ impl LightTree {
         self.nodes.is_empty()
     }
 
+    /// Its depth: the most branchings from the root to a leaf.
+    pub fn depth(&self) -> u32 {
+        fn down(t: &LightTree, at: usize) -> u32 {
+            let node = &t.nodes[at];
+            if node.leaf {
+                0
+            } else {
+                1 + down(t, at + 1).max(down(t, node.child_or_light as usize))
+            }
+        }
+        if self.nodes.is_empty() {
+            0
+        } else {
+            down(self, 0)
+        }
+    }
+
     /// Bytes the nodes and trails take.
     pub fn memory_bytes(&self) -> usize {
         std::mem::size_of_val(self.nodes.as_slice()) + std::mem::size_of_val(self.trail.as_slice())
@@ -940,7 +961,7 @@ impl LightTree {
             });
             return b;
         }
-        let mid = if depth >= 48 {
+        let mid = if depth >= COUNT_SPLIT_DEPTH {
             (start + end) / 2
         } else {
             split(&mut items[start..end]).map_or((start + end) / 2, |m| start + m)

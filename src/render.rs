@@ -597,7 +597,7 @@ impl<F: SamplerFactory> Job<'_, F> {
             self.factory,
             (set, range, 0..tile_count(self.settings), stop, alloc),
             self.guide,
-            film,
+            Some(film),
             self.progress,
         );
         stats.rays.add(&s.rays);
@@ -770,27 +770,42 @@ impl<F: SamplerFactory> Job<'_, F> {
                 .zip(&next)
                 .map(|(&c, &o)| (c as u64).min(SAMPLE_INDICES - o).max(1) as u32)
                 .collect();
-            let alloc = Alloc {
-                origin: &next,
-                count: &counts,
-            };
             let none = SamplePass { origin: 0, size: 1 };
-            // the first round runs whole, so the image holds something (a stop before it ends
-            // costs that round); a later one the stop flag cuts is dropped
-            let stop = plan.stop.filter(|_| rounds > 0);
             let mut films = Vec::with_capacity(reps as usize);
             for rep in 0..reps {
+                let alloc = Alloc {
+                    origin: &next,
+                    count: &counts,
+                };
                 let mut f = Film::new(w, h);
-                let (_, cut) = self.batch(rep, (none, 0..0, stop, Some(alloc)), &mut f, stats);
+                let (_, cut) = self.batch(rep, (none, 0..0, plan.stop, Some(alloc)), &mut f, stats);
                 if cut {
                     interrupted = true;
                     break;
                 }
                 films.push(f);
             }
-            if interrupted {
-                break;
+            if interrupted && rounds > 0 {
+                break; // a later round the stop flag cuts is dropped
             }
+            let (size, counts) = if interrupted {
+                // a stop in the first round: the image still needs every pixel in every
+                // replicate, so the round becomes one sample each, rendered whole (quick)
+                let ones = vec![1u32; raw.len()];
+                films.clear();
+                for rep in 0..reps {
+                    let alloc = Alloc {
+                        origin: &next,
+                        count: &ones,
+                    };
+                    let mut f = Film::new(w, h);
+                    self.batch(rep, (none, 0..0, None, Some(alloc)), &mut f, stats);
+                    films.push(f);
+                }
+                (1, ones)
+            } else {
+                (size, counts)
+            };
             for (rep, f) in films.iter().enumerate() {
                 replicates.add_means(rep as u32, f, size as f64);
                 raw.merge(f).map_err(Error::Settings)?;
@@ -878,30 +893,41 @@ fn train_guide<F: SamplerFactory>(
             origin: 0,
             size: spp as u32,
         };
-        // chunks of about 2^20 samples: their records (~16 bytes per bounce) stay within
-        // some tens of MiB
-        let chunk = ((1u64 << 20) / (spp * (TILE * TILE) as u64)).max(1) as u32;
-        let mut film = Film::new(settings.width, settings.height);
-        let mut first = 0;
-        while first < tiles {
-            let end = (first + chunk).min(tiles);
-            let (s, _, records) = render_with(
-                scene,
-                camera,
-                &iteration,
-                factory,
-                (set, 0..spp, first..end, None, None),
-                Guide {
-                    tree: Some(&tree),
-                    record: true,
-                },
-                &mut film,
-                &NoProgress,
-            );
-            stats.rays.add(&s.rays);
-            stats.thread_time += s.thread_time;
+        let mut stopped = false;
+        for (tile_range, samples) in training_chunks(tiles, spp) {
+            let pieces = sample_pieces(&tile_range, samples);
+            let results: Vec<(RenderStats, bool, Vec<Record>)> = pieces
+                .into_par_iter()
+                .map(|range| {
+                    render_with(
+                        scene,
+                        camera,
+                        &iteration,
+                        factory,
+                        (set, range, tile_range.clone(), plan.stop, None),
+                        Guide {
+                            tree: Some(&tree),
+                            record: true,
+                        },
+                        None,
+                        &NoProgress,
+                    )
+                })
+                .collect();
+            let mut records = Vec::with_capacity(results.iter().map(|r| r.2.len()).sum());
+            for (s, cut, mut r) in results {
+                stats.rays.add(&s.rays);
+                stats.thread_time += s.thread_time;
+                stopped |= cut;
+                records.append(&mut r);
+            }
+            if stopped {
+                break; // a cut chunk's records are dropped, and training ends
+            }
             tree.add_records(records);
-            first = end;
+        }
+        if stopped {
+            break;
         }
         tree.finish_iteration(k);
         g.iterations += 1;
@@ -911,6 +937,50 @@ fn train_guide<F: SamplerFactory>(
     g.training = start.elapsed();
     stats.guide = Some(g);
     tree
+}
+
+/// Path samples a training chunk renders at most: its records (about 16 bytes per bounce)
+/// are the training's memory, at most `16 B × max depth × 2²⁰` (160 MiB at depth 10) whatever
+/// the spp and the image size.
+const TRAINING_CHUNK: u64 = 1 << 20;
+
+/// The chunks of a training iteration of `spp` samples per pixel over `tiles` tiles, in the
+/// order their records reach the tree: runs of whole tiles with all their samples while a
+/// tile's samples fit in [`TRAINING_CHUNK`], else each tile in slices of samples. The split
+/// depends on the image and the spp only, so the tree is the same for any thread count.
+fn training_chunks(tiles: u32, spp: u64) -> Vec<(Range<u32>, Range<u64>)> {
+    let per_tile = spp * (TILE * TILE) as u64;
+    if per_tile <= TRAINING_CHUNK {
+        let n = (TRAINING_CHUNK / per_tile) as u32;
+        (0..tiles)
+            .step_by(n as usize)
+            .map(|t| (t..(t + n).min(tiles), 0..spp))
+            .collect()
+    } else {
+        let slice = TRAINING_CHUNK / (TILE * TILE) as u64;
+        (0..tiles)
+            .flat_map(|t| {
+                (0..spp)
+                    .step_by(slice as usize)
+                    .map(move |s| (t..t + 1, s..(s + slice).min(spp)))
+            })
+            .collect()
+    }
+}
+
+/// A chunk of fewer than 8 tiles is rendered as 8 consecutive slices of its samples side by
+/// side (threads work over tiles, so a chunk of one tile kept one core busy); their records
+/// follow in slice order. A fixed count, not the threads', keeps the tree thread-independent.
+fn sample_pieces(tiles: &Range<u32>, samples: Range<u64>) -> Vec<Range<u64>> {
+    const PIECES: u64 = 8;
+    let n = samples.end - samples.start;
+    if tiles.len() >= PIECES as usize || n < 2 {
+        return vec![samples];
+    }
+    let k = PIECES.min(n);
+    (0..k)
+        .map(|i| samples.start + n * i / k..samples.start + n * (i + 1) / k)
+        .collect()
 }
 
 /// The guide a guided render of `scene` with `settings` learns before its final iteration (the
@@ -1000,10 +1070,12 @@ fn render_with<F: SamplerFactory>(
         Option<Alloc>,
     ),
     guide: Guide,
-    film: &mut Film,
+    mut film: Option<&mut Film>,
     progress: &dyn Progress,
 ) -> (RenderStats, bool, Vec<Record>) {
     let start = Instant::now();
+    // training renders keep no film: their samples only teach the guide
+    let sums = film.as_deref();
     let integrator = settings.integrator();
     let sampler = factory.make(settings.seed, pass);
     let tiles_x = settings.width.div_ceil(TILE);
@@ -1035,8 +1107,9 @@ fn render_with<F: SamplerFactory>(
                         break 'pixels;
                     }
                     let pixel = UVec2::new(x, y);
-                    let i = film.index(x, y);
-                    let (mut sum, mut sum_sq, mut n) = film.pixel_sums(i);
+                    let i = (y * settings.width + x) as usize;
+                    let (mut sum, mut sum_sq, mut n) =
+                        sums.map_or((DVec3::ZERO, DVec3::ZERO, 0), |f| f.pixel_sums(i));
                     let range = match alloc {
                         None => range.clone(),
                         Some(a) => {
@@ -1092,12 +1165,14 @@ fn render_with<F: SamplerFactory>(
         records.append(&mut tile.records);
         // the pixels a tile rendered, in its order (all of them unless it was cut short)
         let w = tile.size.x as usize;
-        for (k, &(s, s2, n)) in tile.sums.iter().enumerate() {
-            let (x, y) = (
-                tile.origin.x + (k % w) as u32,
-                tile.origin.y + (k / w) as u32,
-            );
-            film.set_pixel_sums(film.index(x, y), s, s2, n);
+        if let Some(film) = film.as_deref_mut() {
+            for (k, &(s, s2, n)) in tile.sums.iter().enumerate() {
+                let (x, y) = (
+                    tile.origin.x + (k % w) as u32,
+                    tile.origin.y + (k / w) as u32,
+                );
+                film.set_pixel_sums(film.index(x, y), s, s2, n);
+            }
         }
         cut |= tile.cut;
         stats.rays.add(&tile.rays);
@@ -1107,4 +1182,38 @@ fn render_with<F: SamplerFactory>(
     }
     stats.elapsed = start.elapsed();
     (stats, cut, records)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Guided training's memory is bounded whatever the spp (issue 34: a 16×16 door at 262,144
+    /// spp peaked at 1.9 GB): every chunk renders at most `TRAINING_CHUNK` path samples, the
+    /// chunks cover every (tile, sample) once in order, and a chunk of few tiles is split into
+    /// slices of samples that run side by side (one tile kept one core busy) and cover it.
+    #[test]
+    fn training_chunks_bound_the_records_and_cover_every_sample() {
+        for tiles in [1u32, 3, 7, 8, 9, 192, 8100] {
+            for k in [0u32, 4, 9, 10, 12, 13, 16, 18] {
+                let spp = 1u64 << k;
+                let chunks = training_chunks(tiles, spp);
+                let mut covered = 0u64;
+                let mut last = (0u32, 0u64);
+                for (t, s) in &chunks {
+                    let n = t.len() as u64 * (s.end - s.start) * (TILE * TILE) as u64;
+                    assert!(n <= TRAINING_CHUNK, "{n} path samples in a chunk");
+                    assert!((t.start, s.start) >= last, "chunks in order");
+                    last = (t.start, s.start);
+                    let pieces = sample_pieces(t, s.clone());
+                    assert_eq!(pieces.first().unwrap().start, s.start);
+                    assert_eq!(pieces.last().unwrap().end, s.end);
+                    assert!(pieces.windows(2).all(|w| w[0].end == w[1].start));
+                    assert!(t.len() >= 8 || s.end - s.start < 2 || pieces.len() == 8);
+                    covered += t.len() as u64 * (s.end - s.start);
+                }
+                assert_eq!(covered, tiles as u64 * spp, "{tiles} tiles at {spp} spp");
+            }
+        }
+    }
 }

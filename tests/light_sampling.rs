@@ -885,3 +885,60 @@ fn pairing_rectangles_is_linear_in_a_fan_of_emitters() {
         "the fan stays triangles, the square pairs"
     );
 }
+
+/// Second review (issue 34, suspected by reading): a light's path in the tree is stored as one
+/// bit per level in a u64, so a tree deeper than 64 levels made deep lights' paths collide and
+/// their pmf (what MIS weighs with) disagree with their choice. A thousand lights spaced
+/// geometrically along a line (x = 10 + 1.035^k, brighter with k) make the SAOH split peel
+/// about one light per level down to depth 48, where splits go by count; the 70,000 lights
+/// clustered at the origin are then split by count, 17 levels more (65 in all before the fix).
+/// The tree must stay within
+/// the trail's 64 bits, and for receivers near the cluster every unit `k` chooses a light whose
+/// pmf, followed along its own path, gives exactly the units the choice reported.
+#[test]
+fn a_deep_light_tree_keeps_every_lights_path() {
+    use vrpt::lights::LightTree;
+    let tri = |k: u32, c: Vec3, s: f32, le: f32| {
+        let v = [c, c + Vec3::new(s, 0.0, 0.0), c + Vec3::new(0.0, 0.0, s)];
+        Emitter::triangle(k, v, Vec3::splat(le))
+    };
+    let mut emitters: Vec<Emitter> = (0..1000u32)
+        .map(|k| {
+            let x = 10.0 + 1.035f32.powi(k as i32);
+            tri(k, Vec3::new(x, 1.0, 0.0), 1e-3 * x, 1.0 + k as f32)
+        })
+        .collect();
+    let side = 264u32;
+    for j in 0..70_000u32 {
+        let c = Vec3::new(
+            (j % side) as f32 / side as f32,
+            1.0,
+            (j / side) as f32 / side as f32,
+        );
+        emitters.push(tri(1000 + j, c, 1e-3, 1.0));
+    }
+    let tree = LightTree::build(&emitters);
+    assert!(
+        tree.depth() >= 50,
+        "the test needs a deep tree: depth {}",
+        tree.depth()
+    );
+    assert!(
+        tree.depth() <= 64,
+        "depth {}: past the trail's 64 bits",
+        tree.depth()
+    );
+    let units = 1u32 << 24;
+    let mut checked = 0;
+    for p in [Vec3::new(0.5, 0.0, 0.5), Vec3::new(0.1, 0.5, 0.9)] {
+        let n = Vec3::Y;
+        for j in 0..50_000u32 {
+            let k = (j as u64 * units as u64 / 50_000) as u32;
+            if let Some((i, got)) = tree.choose(p, n, k, 0..units) {
+                assert_eq!(tree.units(p, n, i, 0..units), got, "light {i} from {p}");
+                checked += 1;
+            }
+        }
+    }
+    assert!(checked > 50_000);
+}
