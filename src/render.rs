@@ -756,6 +756,12 @@ impl<F: SamplerFactory> Job<'_, F> {
                 interrupted = true;
                 break;
             }
+            // a round gives every pixel at least one sample (unbiasedness needs it): it cannot
+            // run once a pixel has used the last sample index, 2³² − 1 (hot pixels take more
+            // than the spp, so a render that starts near the end can get there)
+            if next.iter().any(|&o| o >= SAMPLE_INDICES) {
+                break;
+            }
             let counts: Vec<u32> = if rounds == 0 {
                 vec![size as u32; raw.len()]
             } else {
@@ -768,7 +774,7 @@ impl<F: SamplerFactory> Job<'_, F> {
             let counts: Vec<u32> = counts
                 .iter()
                 .zip(&next)
-                .map(|(&c, &o)| (c as u64).min(SAMPLE_INDICES - o).max(1) as u32)
+                .map(|(&c, &o)| (c as u64).min(SAMPLE_INDICES.saturating_sub(o)).max(1) as u32)
                 .collect();
             let none = SamplePass { origin: 0, size: 1 };
             let mut films = Vec::with_capacity(reps as usize);

@@ -873,3 +873,52 @@ fn one_sample_claims_no_error_and_replicates_need_their_samples() {
         assert_one_line_error(&vrpt(&a), &extra.join(" "), "needs at least");
     }
 }
+
+/// Second review (issue 34, suspected by reading): an adaptive render whose samples start near
+/// the last sample index, 2³² − 1. Hot pixels take more samples than the spp, so a pixel's next
+/// index reached 2³², every later round still gave it one sample, and the next count's
+/// `2³² − next` underflowed (a panic with overflow checks, as this test's binary has; a wrapped
+/// sample index without). Equal rounds (a time limit) make many rounds after the hottest pixel
+/// runs out. Now the rounds end where a pixel has no index left, and the render writes what it
+/// took.
+#[test]
+fn adaptive_rounds_stop_at_the_last_sample_index() {
+    let dir = tempfile::tempdir().unwrap();
+    let exr = dir.path().join("x.exr");
+    let scene = common::cornell_path();
+    let first = (u32::MAX - 4095).to_string();
+    let out = vrpt(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--width",
+        "24",
+        "--height",
+        "24",
+        "--spp",
+        "4096",
+        "--first-sample",
+        &first,
+        "--adaptive",
+        "--replicates",
+        "2",
+        "--pass-spp",
+        "64",
+        "--time-limit",
+        "100",
+        "-o",
+        exr.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    let img = vrpt::image_io::read_exr(&exr).unwrap();
+    assert!(img.pixels.iter().all(|p| p.is_finite()));
+    let counts = img.samples.unwrap();
+    assert!(
+        counts.iter().all(|&n| n >= 2),
+        "every pixel in every replicate"
+    );
+    assert!(
+        counts.iter().all(|&n| n as u64 <= 2 * 4096),
+        "no index past the last"
+    );
+}
