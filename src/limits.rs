@@ -93,10 +93,25 @@ pub fn check_render_memory(width: u32, height: u32, replicates: u32) -> Result<(
     check_bytes(&what, need)
 }
 
+/// The most texels a PNG, JPEG or TGA file can hold per byte: deflate stops at 1032:1 and a
+/// 1-bit PNG packs 8 pixels a byte (8256); JPEG's and TGA's run-length codes hold far fewer. A
+/// header that declares more lies about its size.
+pub const MAX_TEXELS_PER_BYTE: u64 = 8256;
+
 /// Refuse a texture or environment map of `width`×`height` texels from its header: more than
-/// [`MAX_TEXELS`], or more memory than the system can give.
-pub fn check_texels(width: u64, height: u64) -> std::result::Result<(), String> {
+/// [`MAX_TEXELS`], more than a file of `file_bytes` can hold ([`MAX_TEXELS_PER_BYTE`]; `None`
+/// for formats this does not bound), or more memory than the system can give.
+pub fn check_texels(
+    width: u64,
+    height: u64,
+    file_bytes: Option<u64>,
+) -> std::result::Result<(), String> {
     let texels = width.saturating_mul(height);
+    if let Some(bytes) = file_bytes.filter(|&b| texels > MAX_TEXELS_PER_BYTE.saturating_mul(b)) {
+        return Err(format!(
+            "its header declares {width}x{height} texels, more than a {bytes}-byte file can hold"
+        ));
+    }
     if texels > MAX_TEXELS {
         return Err(format!(
             "its header declares {width}x{height} texels, more than the {MAX_TEXELS} vrpt reads"

@@ -113,7 +113,10 @@ impl Texture {
         };
         // the header's size first: a few kilobytes can declare gigabytes of texels
         let (w, h) = open()?.into_dimensions().map_err(|e| err(e.to_string()))?;
-        crate::limits::check_texels(w as u64, h as u64).map_err(err)?;
+        let bytes = std::fs::metadata(path)
+            .map_err(|e| err(e.to_string()))?
+            .len();
+        crate::limits::check_texels(w as u64, h as u64, Some(bytes)).map_err(err)?;
         let mut reader = open()?;
         let mut limits = image::Limits::default();
         limits.max_alloc =

@@ -922,3 +922,23 @@ fn adaptive_rounds_stop_at_the_last_sample_index() {
         "no index past the last"
     );
 }
+
+proptest::proptest! {
+    /// Second review (issue 34): the float flags' parsers take any string without a panic and
+    /// accept only values inside their documented ranges (times up to `MAX_SECONDS`, exposures
+    /// within ±`MAX_EXPOSURE`), whatever the float: NaN, ±inf, 1e300, subnormals, any bits.
+    #[test]
+    fn float_flag_parsers_accept_only_their_ranges(bits in proptest::prelude::any::<u64>(), pick in 0..4usize) {
+        let x = f64::from_bits(bits);
+        let text = [x.to_string(), format!("{x:e}"), format!("{}", x as f32), format!("-{x}")][pick].clone();
+        if let Ok(t) = vrpt::output::parse_seconds(&text) {
+            proptest::prop_assert!(t > 0.0 && t <= vrpt::limits::MAX_SECONDS);
+            proptest::prop_assert!(vrpt::limits::duration("--time-limit", t).is_ok());
+        }
+        if let Ok(e) = vrpt::output::parse_exposure(&text) {
+            proptest::prop_assert!(e.abs() <= vrpt::limits::MAX_EXPOSURE);
+        }
+        // the library's own check of a time takes any float without a panic
+        let _ = vrpt::limits::duration("--time-limit", x);
+    }
+}

@@ -1,7 +1,8 @@
-//! A fuzzing test on stable Rust: proptest feeds the OBJ, MTL, `scene.toml` and EXR readers
-//! mutated copies of the shipped scenes and of a vrpt EXR (bytes flipped, cut, duplicated and
-//! spliced; tokens replaced by hostile ones: NaN, infinities, huge and negative numbers, stray
-//! indices and keywords). A scene that loads is also rendered (2×2, 1 spp).
+//! A fuzzing test on stable Rust: proptest feeds the OBJ, MTL, `scene.toml`, EXR and texture
+//! readers mutated copies of the shipped scenes, of a vrpt EXR and of a PNG texture (bytes
+//! flipped, cut, duplicated and spliced; tokens replaced by hostile ones: NaN, infinities, huge
+//! and negative numbers, stray indices and keywords; PNG headers that lie about their size). A
+//! scene that loads is also rendered (2×2, 1 spp).
 //!
 //! Contract for every input: `Ok`, or an `Err` whose message is one line of bounded length;
 //! never a panic (proptest reports it, with the shrunk input), and never an allocation
@@ -206,6 +207,21 @@ enum Target {
     Mtl,
     Toml,
     Exr,
+    /// A texture the MTL's first material reads (`map_Kd tex.png`), its header's size rewritten
+    /// to a lie in some cases (the IHDR checksum fixed, so only the size lies).
+    Png,
+}
+
+/// `png` with its IHDR's width and height set to `w`, `h` and its checksum fixed.
+fn lie_about_size(mut png: Vec<u8>, w: u32, h: u32) -> Vec<u8> {
+    if png.len() >= 33 && &png[12..16] == b"IHDR" {
+        png[16..20].copy_from_slice(&w.to_be_bytes());
+        png[20..24].copy_from_slice(&h.to_be_bytes());
+        let mut crc = flate2::Crc::new();
+        crc.update(&png[12..29]);
+        png[29..33].copy_from_slice(&crc.sum().to_be_bytes());
+    }
+    png
 }
 
 /// The contract on an error: one line, bounded.
@@ -282,6 +298,13 @@ fn readers_survive_mutated_inputs() {
         vrpt::image_io::write_exr(&exr_path, &img).unwrap();
     }
     let exr = std::fs::read(&exr_path).unwrap();
+    let png_path = d.join("seed.png");
+    image::RgbaImage::from_fn(4, 4, |x, y| {
+        image::Rgba([40 * x as u8, 60 * y as u8, 90, 255])
+    })
+    .save(&png_path)
+    .unwrap();
+    let png = std::fs::read(&png_path).unwrap();
     let mut seeds: Vec<Vec<u8>> = scenes
         .iter()
         .flat_map(|(o, m, t)| [o.clone(), m.clone(), t.clone()])
@@ -289,13 +312,20 @@ fn readers_survive_mutated_inputs() {
     seeds.push(exr.clone());
 
     let strategy = (
-        0..4usize,
+        0..5usize,
         0..scenes.len(),
         prop::collection::vec(edit(), 1..6),
+        prop::option::of((1..=u32::MAX, 1..=u32::MAX)),
     );
     let (ok, err) = (std::cell::Cell::new(0u32), std::cell::Cell::new(0u32));
-    let result = runner.run(&strategy, |(target, k, edits)| {
-        let target = [Target::Obj, Target::Mtl, Target::Toml, Target::Exr][target];
+    let result = runner.run(&strategy, |(target, k, edits, lie)| {
+        let target = [
+            Target::Obj,
+            Target::Mtl,
+            Target::Toml,
+            Target::Exr,
+            Target::Png,
+        ][target];
         let (obj, mtl, toml) = &scenes[k];
         let case = d.join("case");
         let _ = std::fs::remove_dir_all(&case);
@@ -320,6 +350,29 @@ fn readers_survive_mutated_inputs() {
                 LARGEST.store(0, Ordering::Relaxed);
                 vrpt::image_io::read_exr(&p)
                     .and_then(|img| vrpt::output::RenderMetadata::from_image(&img, &p).map(|_| ()))
+            }
+            Target::Png => {
+                // the seed scene, its first material textured by the mutated PNG
+                let mut bytes = apply(png.clone(), &edits, &seeds);
+                if let Some((w, h)) = lie {
+                    bytes = lie_about_size(png.clone(), w % 100_000 + 1, h % 100_000 + 1);
+                }
+                std::fs::write(case.join("tex.png"), bytes).unwrap();
+                let mtl = String::from_utf8_lossy(&files[1]).replacen(
+                    "\nKd ",
+                    "\nmap_Kd tex.png\nKd ",
+                    1,
+                );
+                let obj_file = obj_name
+                    .trim()
+                    .trim_start_matches('=')
+                    .trim()
+                    .trim_matches('"');
+                std::fs::write(case.join(obj_file), &files[0]).unwrap();
+                std::fs::write(case.join(&mtl_name), mtl.as_bytes()).unwrap();
+                std::fs::write(case.join("scene.toml"), &files[2]).unwrap();
+                LARGEST.store(0, Ordering::Relaxed);
+                load_and_render(&case)
             }
             t => {
                 let i = t as usize;
