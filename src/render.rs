@@ -920,17 +920,17 @@ fn train_guide<F: SamplerFactory>(
                     )
                 })
                 .collect();
-            let mut records = Vec::with_capacity(results.iter().map(|r| r.2.len()).sum());
-            for (s, cut, mut r) in results {
-                stats.rays.add(&s.rays);
-                stats.thread_time += s.thread_time;
-                stopped |= cut;
-                records.append(&mut r);
-            }
+            stopped |= results.iter().any(|r| r.1);
             if stopped {
                 break; // a cut chunk's records are dropped, and training ends
             }
-            tree.add_records(records);
+            // piece by piece, in order: a leaf sees the records in the same order as from
+            // their concatenation, without a copy of them all
+            for (s, _, records) in results {
+                stats.rays.add(&s.rays);
+                stats.thread_time += s.thread_time;
+                tree.add_records(records);
+            }
         }
         if stopped {
             break;
@@ -946,9 +946,9 @@ fn train_guide<F: SamplerFactory>(
 }
 
 /// Path samples a training chunk renders at most: its records (about 16 bytes per bounce)
-/// are the training's memory, at most `16 B × max depth × 2²⁰` (160 MiB at depth 10) whatever
-/// the spp and the image size.
-const TRAINING_CHUNK: u64 = 1 << 20;
+/// are the training's memory, at most `16 B × max depth × 2¹⁸` (40 MiB at depth 10, twice
+/// that while a piece is sorted into the tree) whatever the spp and the image size.
+const TRAINING_CHUNK: u64 = 1 << 18;
 
 /// The chunks of a training iteration of `spp` samples per pixel over `tiles` tiles, in the
 /// order their records reach the tree: runs of whole tiles with all their samples while a
