@@ -2,7 +2,7 @@
 # Make every picture the README shows, into docs/, with the settings written here (one command:
 # `tools/readme_pictures.sh`, from anywhere; about 2 minutes on 2 cores). Run it after a change
 # that alters images, look at the pictures, and commit them: `*.png` is ignored by .gitignore
-# except under docs/, and tests/architecture.rs fails on a README picture that git does not track.
+# except under docs/, and tests/suite/architecture.rs fails on a README picture that git does not track.
 #
 # The renders use the shipped scenes at their scene.toml sizes and fixed seeds, so a rerun on the
 # same code gives the same files.

@@ -37,7 +37,7 @@
 //! big light but Ns 200 a tall-box pixel still reached z = 5.2). The sharp lobe itself is held
 //! by the chi-square tests of the material (n up to 1000).
 
-mod common;
+use crate::common;
 
 use common::render_quiet;
 use std::path::Path;

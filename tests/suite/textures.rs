@@ -2,9 +2,9 @@
 //! a cutout (`map_d`) casts exactly the shadow of its opaque half, bump and normal maps tilt the
 //! shading normal as their formulas say, and the shipped textured scene renders. (sRGB decoding
 //! and bilinear lookups are unit tests of `src/texture.rs`; a missing texture is a case of
-//! tests/hostile_inputs.rs.)
+//! tests/suite/hostile_inputs.rs.)
 
-mod common;
+use crate::common;
 
 use common::write;
 use glam::{Vec2, Vec3};

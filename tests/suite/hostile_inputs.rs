@@ -3,7 +3,7 @@
 //! error messages of bounded length, images whose metadata or header disagrees with their
 //! content. Each gives one error line and a non-zero exit, never a panic or an image.
 
-mod common;
+use crate::common;
 
 use glam::Vec3;
 use std::path::{Path, PathBuf};

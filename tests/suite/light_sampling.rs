@@ -8,7 +8,7 @@
 //! pdf that the two MIS weights use are the same two numbers, so the weights sum to 1 (all
 //! direction strategies, every way of placing points and choosing lights).
 
-mod common;
+use crate::common;
 
 use glam::{Vec2, Vec3};
 use rand::{rngs::SmallRng, Rng, SeedableRng};

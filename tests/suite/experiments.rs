@@ -3,7 +3,7 @@
 //! stratification on checker-plane, the combination on both, no strategy biased), `converge`
 //! slopes on checker-plane, and `merge` equal to one render.
 
-mod common;
+use crate::common;
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -100,7 +100,7 @@ fn compare_presets(
 /// The bias test covers the Phong-direction strategies only: uniform directions miss the sharp
 /// highlights in all 16 runs often enough that their errors share a sign (measured t = −6.5) —
 /// rarity, not bias (an independent render at 131072 spp agrees with the reference, image bias
-/// z = +0.27); their unbiasedness is held by tests/unbiased_images.rs.
+/// z = +0.27); their unbiasedness is held by tests/suite/unbiased_images.rs.
 #[test]
 fn compare_on_glossy_plates() {
     let dir = tempfile::tempdir().unwrap();

@@ -4,7 +4,7 @@
 //! render, it is unbiased by a z-test against a reference (and a biased one fails that test),
 //! and it sits in `compare`/`converge` tables beside the built-in strategies.
 
-mod common;
+use crate::common;
 
 use glam::{UVec2, Vec2};
 use vrpt::analysis::experiments::{compare_entries, converge_entries, Entry, ExperimentSettings};

@@ -1,7 +1,7 @@
 //! The renderer core: the BVH against brute force, the white furnace, determinism across
 //! thread counts.
 
-mod common;
+use crate::common;
 
 use common::{icosphere_obj, render_quiet, write};
 use glam::{Vec2, Vec3};

@@ -1,7 +1,7 @@
 //! Scene loading: OBJ + MTL + scene.toml into triangles, materials and emitters, and a clear
 //! error for each kind of bad input.
 
-mod common;
+use crate::common;
 
 use common::write;
 use glam::Vec3;

@@ -3,7 +3,7 @@
 //! SIGTERM) that keep the samples taken, while a second signal aborts without touching the
 //! output.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 use std::process::{Command, Output, Stdio};

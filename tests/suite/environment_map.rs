@@ -7,7 +7,7 @@
 //! Significance: the chi-square tests of this file are held at family-wise α = 0.01 (Šidák),
 //! the z-tests at family-wise 10⁻³; seeds come from `VRPT_TEST_SEED` (`common::seed`).
 
-mod common;
+use crate::common;
 
 use common::{icosphere_obj, write};
 use glam::{Vec2, Vec3};
@@ -154,7 +154,7 @@ fn map_sampling_fits_its_pdf_in_the_direction_harness() {
     assert_eq!(r.failed, 0);
 }
 
-/// The white furnace of tests/render_core.rs (a diffuse sphere of albedo 0.8, whose pixels that
+/// The white furnace of tests/suite/render_core.rs (a diffuse sphere of albedo 0.8, whose pixels that
 /// see only the sphere have expected value 0.8) under a constant white *map* instead of
 /// `radiance = [1, 1, 1]`:
 /// - sampled by the cosine (`--light-points area`) the map is the constant: the images are
@@ -321,7 +321,7 @@ fn nee_and_mis_with_the_map_are_unbiased_on_sun_sky() {
 /// (`LightSampler::environment_pdf`, what the integrator computes when a ray escapes) equals the
 /// sample's own pdf, for every way of placing points (the map's distribution for solid-angle
 /// and projected, the cosine for area) and of choosing lights; with the BSDF pdf shared by both
-/// sides (tests/light_sampling.rs), `w_light + w_bsdf = 1`. The two pdfs come from one texel
+/// sides (tests/suite/light_sampling.rs), `w_light + w_bsdf = 1`. The two pdfs come from one texel
 /// lookup each, the sample's through its (u, v) and the ray's through the inverse map: equal
 /// to f32 rounding, except on texel boundaries, where they may name neighbours (rare; allowed
 /// for 1 in 1000).

@@ -10,7 +10,7 @@
 //! sampler that puts 5% of a quadrant of mass 0.2 elsewhere moves 200,000·0.01 = 2000 samples,
 //! far beyond the ≈ √(4·10⁴) = 200 noise of such a quadrant: the power test shows it caught.
 
-mod common;
+use crate::common;
 
 use glam::{Vec2, Vec3};
 use rand::{rngs::SmallRng, Rng, SeedableRng};

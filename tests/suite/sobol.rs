@@ -1,9 +1,9 @@
 //! The Sobol sampler: the (0,2)-sequence property of its first two dimensions, independence
 //! between pixels, unbiasedness on a known integral and in images, convergence slopes against
-//! padded strata (checker plane in tests/experiments.rs; lit-checker and the Cornell box here),
+//! padded strata (checker plane in tests/suite/experiments.rs; lit-checker and the Cornell box here),
 //! and renders past the crate's 2¹⁶ samples per sequence.
 
-mod common;
+use crate::common;
 
 use glam::{UVec2, Vec2};
 use vrpt::analysis::experiments::converge;

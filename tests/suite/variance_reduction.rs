@@ -7,7 +7,7 @@
 //! - importance sampling the Phong lobe cuts the variance of the specular term by orders of
 //!   magnitude against uniform directions, with cosine directions in between.
 
-mod common;
+use crate::common;
 
 use glam::{UVec2, Vec2, Vec3};
 use std::f64::consts::PI;

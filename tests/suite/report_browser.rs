@@ -21,7 +21,7 @@ use vrpt::analysis::metrics::metrics;
 use vrpt::analysis::report::decode_halves;
 use vrpt::image_io::{read_exr, RgbImage};
 
-mod common;
+use crate::common;
 
 /// Chromium, chromedriver and node, or None (with the reason) when one is missing.
 fn browser() -> Option<()> {

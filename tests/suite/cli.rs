@@ -1,7 +1,7 @@
 //! The `vrpt` binary end to end: a small Cornell box render to PNG and EXR, and one clear error
 //! line with a non-zero exit (never a panic) for each kind of bad input.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 use std::process::{Command, Output};

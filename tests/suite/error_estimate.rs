@@ -1,6 +1,6 @@
 //! An image's own error estimate, adaptive sampling and `--target-error`, against references.
 
-mod common;
+use crate::common;
 
 use common::{seed, shipped};
 use glam::Vec3;
