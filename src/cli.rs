@@ -38,6 +38,8 @@ pub enum Command {
     Compare(CompareArgs),
     /// Render a scene with several strategies at several spp and fit how fast the error falls.
     Converge(ConvergeArgs),
+    /// Draw a sampler's points in the unit square, with their discrepancy and power spectrum.
+    Points(vrpt::commands::points::PointsRequest),
     /// Show what path guiding learned at a pixel's first hit, beside the incident radiance there.
     Guide {
         #[command(flatten)]
@@ -62,7 +64,7 @@ pub struct StrategyArgs {
     /// How light is found at each vertex (default: mis).
     #[arg(long, value_enum)]
     pub lights: Option<LightStrategy>,
-    /// How a point on a light is placed (default: projected).
+    /// How a point on a light is placed (default: auto).
     #[arg(long, value_enum)]
     pub light_points: Option<LightPoints>,
     /// How the light of a vertex is chosen (default: tree).
@@ -271,6 +273,7 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
         Command::Diff(args) => ok(run_diff(args)),
         Command::Compare(args) => ok(run_compare(args)),
         Command::Converge(args) => ok(run_converge(args)),
+        Command::Points(r) => ok(vrpt::commands::points::run(&r).map(|o| out(&o.table()))),
         Command::Guide { request, strategy } => ok(run_guide(request, strategy)),
     }
 }

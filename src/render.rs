@@ -347,14 +347,16 @@ impl<S: Sampler, F: Fn(u64, SamplePass) -> S + Sync> SamplerFactory for F {
     }
 }
 
-/// The built-in samplers' factories, one per [`SamplerKind`].
-fn independent(seed: u64, _: SamplePass) -> IndependentSampler {
+/// The built-in samplers' factories, one per [`SamplerKind`]: independent points.
+pub fn independent(seed: u64, _: SamplePass) -> IndependentSampler {
     IndependentSampler::new(seed)
 }
-fn stratified(seed: u64, pass: SamplePass) -> StratifiedSampler {
+/// Stratified points, the pass's set.
+pub fn stratified(seed: u64, pass: SamplePass) -> StratifiedSampler {
     StratifiedSampler::with_origin(seed, pass.size, pass.origin)
 }
-fn sobol(seed: u64, _: SamplePass) -> SobolSampler {
+/// Owen-scrambled Sobol points.
+pub fn sobol(seed: u64, _: SamplePass) -> SobolSampler {
     SobolSampler::new(seed)
 }
 

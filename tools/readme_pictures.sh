@@ -76,4 +76,8 @@ $vrpt render scenes/sun-sky --width 256 --height 192 --spp 16 --seed 1 -q --ligh
 # Textures (README "Textures, cutouts and bump maps"): the textured scene at 256 spp.
 $vrpt render scenes/textured --width 256 --height 192 --spp 256 --seed 1 -q -o "$out/textured.png"
 
+# The theory (README "The theory, by command"): 256 points of each sampler in the pixel's
+# dimensions, the strata and the independence box drawn, and their spectra over 16 sets.
+$vrpt points --n 256 -o "$out/points.png" >/dev/null
+
 ls -l "$out"/*.png

@@ -8,6 +8,7 @@
 //! - [`merge`]: renders made in pieces combined exactly into one reference;
 //! - [`fit`]: least-squares lines and log-log slopes;
 //! - [`plots`]: log-log convergence plots (SVG/PNG) and labelled image grids (PNG);
+//! - [`points`]: a sampler's points in the unit square, their discrepancy and spectrum;
 //! - [`report`]: the self-contained HTML report of compare, converge and diff.
 
 #![warn(missing_docs)]
@@ -18,4 +19,5 @@ pub mod fit;
 pub mod merge;
 pub mod metrics;
 pub mod plots;
+pub mod points;
 pub mod report;

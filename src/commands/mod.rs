@@ -8,12 +8,14 @@
 //! - [`merge`]: renders of the same scene and settings into one image;
 //! - [`diff`]: an image against a reference: metrics, regions, error map, report;
 //! - [`experiment`]: `compare` and `converge`, with their CSV, JSON, grid, plots and report;
-//! - [`guide`]: what path guiding learned at one point, beside the incident radiance there.
+//! - [`guide`]: what path guiding learned at one point, beside the incident radiance there;
+//! - [`points`]: a sampler's points in the unit square, their discrepancy and spectrum.
 
 pub mod diff;
 pub mod experiment;
 pub mod guide;
 pub mod merge;
+pub mod points;
 pub mod render;
 
 use crate::analysis::metrics::Region;

@@ -436,7 +436,14 @@ fn merge_weighs_each_pixel_by_its_sample_count() {
             seed: 40 + k as u64,
             ..Default::default()
         };
-        let meta = RenderMetadata::new(&scene, &settings, &Default::default());
+        // the render's record of what it dropped, as a real one keeps it (merge checks that
+        // the counts add up to spp × pixels less this)
+        let kept: u64 = pixels.iter().map(|&(n, _)| n).sum();
+        let stats = vrpt::render::RenderStats {
+            nonfinite: 16 * 4 - kept,
+            ..Default::default()
+        };
+        let meta = RenderMetadata::new(&scene, &settings, &stats);
         let path = dir.path().join(format!("{k}.exr"));
         write_exr(&path, &vrpt::output::render_image(&f, &meta)).unwrap();
         paths.push(path);

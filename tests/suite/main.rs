@@ -4,10 +4,10 @@
 //! its counting allocator must see no other test's allocations. Run one module with
 //! `cargo test --test suite cli::`.
 
-#[path = "../common/mod.rs"]
-mod common;
 mod architecture;
 mod cli;
+#[path = "../common/mod.rs"]
+mod common;
 mod custom_sampler;
 mod environment_map;
 mod error_estimate;
