@@ -31,7 +31,7 @@ pub enum Command {
     /// Render a scene to an EXR (linear, with metadata) or PNG (tone-mapped sRGB).
     Render(RenderArgs),
     /// Merge renders of the same scene and settings (other seeds or sample ranges) into one.
-    Merge(MergeArgs),
+    Merge(merge::MergeRequest),
     /// Print the error metrics of an EXR against a reference EXR; optionally write an error map.
     Diff(DiffArgs),
     /// Compare strategies' error against a reference over runs, at equal spp or equal time.
@@ -40,6 +40,8 @@ pub enum Command {
     Converge(ConvergeArgs),
     /// Draw a sampler's points in the unit square, with their discrepancy and power spectrum.
     Points(vrpt::commands::points::PointsRequest),
+    /// Test every warp's samples against its integrated pdf: chi-square, p-value and ∫pdf.
+    Warptest(vrpt::commands::warptest::WarptestRequest),
     /// Show what path guiding learned at a pixel's first hit, beside the incident radiance there.
     Guide {
         #[command(flatten)]
@@ -148,17 +150,6 @@ pub struct List<T>(pub Vec<T>);
 /// A comma-separated list of strategies, or `all`.
 fn strategy_list(s: &str) -> std::result::Result<List<Strategy>, String> {
     Strategy::parse_list(s).map(List)
-}
-
-/// `vrpt merge`.
-#[derive(Debug, Clone, Args)]
-pub struct MergeArgs {
-    /// The EXR renders to merge (at least two).
-    #[arg(required = true, num_args = 2..)]
-    pub inputs: Vec<PathBuf>,
-    /// The merged EXR.
-    #[arg(short, long)]
-    pub output: PathBuf,
 }
 
 /// Parts of the image to report on their own.
@@ -274,6 +265,7 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
         Command::Compare(args) => ok(run_compare(args)),
         Command::Converge(args) => ok(run_converge(args)),
         Command::Points(r) => ok(vrpt::commands::points::run(&r).map(|o| out(&o.table()))),
+        Command::Warptest(r) => ok(vrpt::commands::warptest::run(&r).map(|o| out(&o.table()))),
         Command::Guide { request, strategy } => ok(run_guide(request, strategy)),
     }
 }
@@ -373,15 +365,13 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode> {
     Ok(ExitCode::from(if r.interrupted { 130 } else { 0 }))
 }
 
-fn run_merge(args: MergeArgs) -> Result<()> {
-    let output = args.output.clone();
-    let req = merge::MergeRequest {
-        inputs: args.inputs,
-        output: args.output,
-    };
+fn run_merge(req: merge::MergeRequest) -> Result<()> {
     let m = merge::run(&req)?;
     let (n, spp) = (m.inputs, m.spp);
-    eprintln!("merged {n} renders into {} ({spp} spp)", output.display());
+    eprintln!(
+        "merged {n} renders into {} ({spp} spp)",
+        req.output.display()
+    );
     Ok(())
 }
 

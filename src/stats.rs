@@ -26,6 +26,12 @@ pub struct Chi2Binning {
     pub phi_bins: usize,
     /// Midpoint-rule points per bin side for the expected counts.
     pub quadrature: usize,
+    /// What a regular bin that the quadrature found empty but that holds samples expects (0:
+    /// nothing, so any sample there makes the statistic infinite). A pdf whose support ends at
+    /// an outline inside a bin (a light seen from a point) can cover a sliver of it that the
+    /// quadrature misses; with a small value (such bins are pooled) the test stays about the
+    /// distribution, while many samples outside the support still raise the statistic.
+    pub floor: f64,
 }
 
 impl Default for Chi2Binning {
@@ -36,6 +42,7 @@ impl Default for Chi2Binning {
             z_bins: 40,
             phi_bins: 80,
             quadrature: 6,
+            floor: 0.0,
         }
     }
 }
@@ -55,12 +62,25 @@ pub struct Chi2Result {
 /// Chi-square test of `sample(u)` (directions, `None` for a failed sample) against `pdf(ω)`
 /// (per solid angle), with `n` points `u` from `points`.
 pub fn chi2_directions(
+    sample: impl FnMut(Vec2) -> Option<Vec3>,
+    pdf: impl Fn(Vec3) -> f32,
+    points: impl FnMut() -> Vec2,
+    n: usize,
+    b: &Chi2Binning,
+) -> Chi2Result {
+    chi2_directions_binned(sample, pdf, points, n, b).0
+}
+
+/// [`chi2_directions`], and its bins: the observed and the expected counts of the
+/// `z_bins × phi_bins` regular bins, row-major by `cosθ` from `z_lo` up (`φ` along a row), for
+/// pictures of a warp beside its integrated pdf.
+pub fn chi2_directions_binned(
     mut sample: impl FnMut(Vec2) -> Option<Vec3>,
     pdf: impl Fn(Vec3) -> f32,
     mut points: impl FnMut() -> Vec2,
     n: usize,
     b: &Chi2Binning,
-) -> Chi2Result {
+) -> (Chi2Result, Vec<f64>, Vec<f64>) {
     let frame = Frame::from_normal(b.pole);
     let nz = b.z_bins;
     let np = b.phi_bins;
@@ -135,14 +155,22 @@ pub fn chi2_directions(
     for e in &mut expected {
         *e *= n as f64;
     }
+    for (e, &o) in expected[..below].iter_mut().zip(&observed[..below]) {
+        if *e == 0.0 && o > 0.0 {
+            *e = b.floor;
+        }
+    }
     let (statistic, dof) = pooled_chi2(&observed, &expected);
-    Chi2Result {
+    let result = Chi2Result {
         statistic,
         dof,
         p_value: chi2_sf(statistic, dof as f64),
         pdf_integral: total,
         failed: observed[failed_bin] as usize,
-    }
+    };
+    observed.truncate(below);
+    expected.truncate(below);
+    (result, observed, expected)
 }
 
 /// Pearson's statistic over bins, pooling bins expecting < 5 (smallest first); a bin that

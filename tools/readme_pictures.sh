@@ -79,5 +79,6 @@ $vrpt render scenes/textured --width 256 --height 192 --spp 256 --seed 1 -q -o "
 # The theory (README "The theory, by command"): 256 points of each sampler in the pixel's
 # dimensions, the strata and the independence box drawn, and their spectra over 16 sets.
 $vrpt points --n 256 -o "$out/points.png" >/dev/null
+$vrpt warptest -o "$out/warps.png" >/dev/null
 
 ls -l "$out"/*.png

@@ -345,6 +345,45 @@ pub fn write_density_pair(
     Ok((lo, hi))
 }
 
+/// Write rows of two maps each (left and right, `w × h`, row-major, row 0 drawn at the top),
+/// each row on its own log scale (four decades below its largest value) and labelled, as one
+/// PNG: a warp's histogram beside its integrated pdf, for `vrpt warptest`.
+pub fn write_density_rows(
+    path: &Path,
+    rows: &[(String, &[f64], &[f64])],
+    (w, h): (u32, u32),
+) -> Result<()> {
+    let scale = 3;
+    let (gap, label_h) = (16, 22);
+    let row_h = label_h + h * scale + 8;
+    let mut c = Canvas::new(2 * w * scale + gap, row_h * rows.len().max(1) as u32);
+    let mut labels = Vec::new();
+    for (k, (label, left, right)) in rows.iter().enumerate() {
+        let max = left
+            .iter()
+            .chain(right.iter())
+            .copied()
+            .filter(|v| v.is_finite())
+            .fold(0.0f64, f64::max)
+            .max(1e-30);
+        let (a, b) = (
+            false_colour(left, max * 1e-4, max),
+            false_colour(right, max * 1e-4, max),
+        );
+        let y0 = k as u32 * row_h;
+        // bins run up in cosθ: draw the highest first, so the pole is at the top
+        let flip = |v: &[[u8; 3]], i: usize| {
+            let (x, y) = (i as u32 % w, i as u32 / w);
+            v[((h - 1 - y) * w + x) as usize]
+        };
+        c.blit(0, y0 + label_h, w, h, scale, &|i| flip(&a, i));
+        c.blit(w * scale + gap, y0 + label_h, w, h, scale, &|i| flip(&b, i));
+        labels.push((label.clone(), 4, y0 + 4));
+    }
+    c.text(&labels)?;
+    c.write(path)
+}
+
 /// What the error maps show.
 const ERROR_TITLE: &str = "relative squared error (x−r)²/(r²+0.01), log scale";
 

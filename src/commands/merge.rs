@@ -6,10 +6,15 @@ use crate::error::{Error, Result};
 use crate::image_io::{check_image_path, check_outputs, write_exr, Format};
 use std::path::PathBuf;
 
-/// The renders to merge and the EXR to write.
-#[derive(Clone, Debug, Default)]
+/// The renders to merge and the EXR to write (the flags of `vrpt merge`: the request is its
+/// arguments).
+#[derive(Clone, Debug, Default, clap::Args)]
 pub struct MergeRequest {
+    /// The EXR renders to merge (at least two).
+    #[arg(required = true, num_args = 2..)]
     pub inputs: Vec<PathBuf>,
+    /// The merged EXR.
+    #[arg(short, long)]
     pub output: PathBuf,
 }
 

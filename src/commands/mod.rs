@@ -9,7 +9,8 @@
 //! - [`diff`]: an image against a reference: metrics, regions, error map, report;
 //! - [`experiment`]: `compare` and `converge`, with their CSV, JSON, grid, plots and report;
 //! - [`guide`]: what path guiding learned at one point, beside the incident radiance there;
-//! - [`points`]: a sampler's points in the unit square, their discrepancy and spectrum.
+//! - [`points`]: a sampler's points in the unit square, their discrepancy and spectrum;
+//! - [`warptest`]: every warp's samples against its integrated pdf, chi-square and ∫pdf.
 
 pub mod diff;
 pub mod experiment;
@@ -17,6 +18,7 @@ pub mod guide;
 pub mod merge;
 pub mod points;
 pub mod render;
+pub mod warptest;
 
 use crate::analysis::metrics::Region;
 use crate::error::{Error, Result};

@@ -1,0 +1,329 @@
+//! `vrpt warptest`: every warp vrpt draws directions with, tested as Mitsuba's warp test does.
+//! `N` directions from independent uniform `u` are binned in `cosθ × φ` about a pole, beside the
+//! warp's pdf integrated over each bin (a midpoint rule); Pearson's chi-square over the bins
+//! (those expecting fewer than 5 pooled) gives a p-value, and `∫ pdf dω` over the sphere, which
+//! must be 1, is computed by the same quadrature ([`crate::stats::chi2_directions_binned`], the
+//! harness the tests use). The warps: uniform and cosine hemispheres, Phong lobes (exponents 10
+//! and 100), a spherical triangle and a spherical rectangle seen from a point (uniform in solid
+//! angle, and warped by the receiver's cosine: the `solid-angle` and `projected` light points,
+//! through the light sampler itself), and an environment map sampled by luminance (a 64×32 sky
+//! with a sun, built here). `--pdf-scale` multiplies every pdf, to see a wrong one caught.
+
+use crate::environment::EnvMap;
+use crate::error::{Error, Result};
+use crate::image_io::{check_image_path, check_outputs, check_writable, write_bytes};
+use crate::lights::{Emitter, LightChoice, LightPoints, Lights};
+use crate::sampler::{IndependentSampler, Sampler};
+use crate::sampling::{
+    cosine_hemisphere_pdf, phong_lobe_pdf, sample_cosine_hemisphere, sample_phong_lobe,
+    sample_uniform_hemisphere, uniform_hemisphere_pdf,
+};
+use crate::stats::{chi2_directions_binned, Chi2Binning};
+use glam::{UVec2, Vec2, Vec3};
+use std::path::PathBuf;
+
+/// What to test (the flags of `vrpt warptest`).
+#[derive(Clone, Debug, clap::Args)]
+pub struct WarptestRequest {
+    /// Directions drawn per warp.
+    #[arg(long, default_value_t = 200_000, value_parser = clap::value_parser!(u32).range(1000..=100_000_000))]
+    pub n: u32,
+    /// Seed of the uniform points.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// A factor on every pdf (1: the warps' own); 1.05 shows a 5% error caught.
+    #[arg(long, default_value_t = 1.0, value_parser = parse_scale)]
+    pub pdf_scale: f32,
+    /// Histograms beside integrated pdfs, one row per warp (.png).
+    #[arg(short = 'o', long, value_name = "PNG")]
+    pub output: Option<PathBuf>,
+    /// The numbers as JSON.
+    #[arg(long, value_name = "FILE")]
+    pub json: Option<PathBuf>,
+}
+
+fn parse_scale(s: &str) -> std::result::Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(x) if x > 0.0 && x <= 100.0 => Ok(x),
+        _ => Err(format!("'{s}' is not a factor in (0, 100]")),
+    }
+}
+
+/// One warp's test.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct WarpRow {
+    pub warp: String,
+    pub chi2: f64,
+    pub dof: usize,
+    pub p_value: f64,
+    pub pdf_integral: f64,
+    /// Observed and expected counts per bin (`z_bins × phi_bins`), for the picture.
+    #[serde(skip)]
+    pub bins: (Vec<f64>, Vec<f64>, (u32, u32)),
+}
+
+/// A warp: its name, `sample(u)`, its pdf per solid angle, and the binning that resolves it.
+type Warp = (
+    String,
+    Box<dyn Fn(Vec2) -> Option<Vec3>>,
+    Box<dyn Fn(Vec3) -> f32>,
+    Chi2Binning,
+);
+
+/// The warps vrpt has.
+fn warps() -> Vec<Warp> {
+    let mut v: Vec<Warp> = vec![
+        (
+            "uniform hemisphere".into(),
+            Box::new(|u| Some(sample_uniform_hemisphere(u))),
+            Box::new(|w: Vec3| {
+                if w.z > 0.0 {
+                    uniform_hemisphere_pdf()
+                } else {
+                    0.0
+                }
+            }),
+            Chi2Binning::default(),
+        ),
+        (
+            "cosine hemisphere".into(),
+            Box::new(|u| Some(sample_cosine_hemisphere(u))),
+            Box::new(|w: Vec3| cosine_hemisphere_pdf(w.z)),
+            Chi2Binning::default(),
+        ),
+    ];
+    for n in [10.0f32, 100.0] {
+        v.push((
+            format!("Phong lobe, exponent {n}"),
+            Box::new(move |u| Some(sample_phong_lobe(n, u))),
+            Box::new(move |w: Vec3| phong_lobe_pdf(n, w.z)),
+            Chi2Binning {
+                z_lo: 1e-3f32.powf(1.0 / (n + 1.0)),
+                ..Default::default()
+            },
+        ));
+    }
+    // a triangle and a rectangle in the plane z = 0, seen from above
+    let p = Vec3::new(0.1, 0.2, 1.0);
+    let normal = Vec3::new(0.3, 0.0, -1.0).normalize();
+    let tri = [
+        Vec3::new(-1.0, -0.8, 0.0),
+        Vec3::new(1.2, -0.5, 0.0),
+        Vec3::new(0.1, 1.0, 0.0),
+    ];
+    let rect = [
+        Vec3::new(-1.0, -0.8, 0.0),
+        Vec3::new(1.0, -0.8, 0.0),
+        Vec3::new(1.0, 0.9, 0.0),
+        Vec3::new(-1.0, 0.9, 0.0),
+    ];
+    let le = Vec3::splat(5.0);
+    for (shape, corners) in [
+        ("spherical triangle", &tri[..]),
+        ("spherical rectangle", &rect[..]),
+    ] {
+        // wound so that the light faces +z, toward p
+        let emitters = if corners.len() == 3 {
+            vec![Emitter::triangle(
+                0,
+                [corners[0], corners[1], corners[2]],
+                le,
+            )]
+        } else {
+            vec![
+                Emitter::triangle(0, [corners[0], corners[1], corners[2]], le),
+                Emitter::triangle(1, [corners[0], corners[2], corners[3]], le),
+            ]
+        };
+        let centre = corners.iter().sum::<Vec3>() / corners.len() as f32;
+        let pole = (centre - p).normalize();
+        let z_lo = corners
+            .iter()
+            .map(|c| (*c - p).normalize().dot(pole))
+            .fold(1.0f32, f32::min)
+            - 0.02;
+        for points in [LightPoints::SolidAngle, LightPoints::Projected] {
+            let lights = std::rc::Rc::new(
+                Lights::build(emitters.clone(), emitters.len(), Vec3::ZERO, 10.0)
+                    .expect("a light of two triangles"),
+            );
+            let (l1, l2) = (lights.clone(), lights);
+            let corners = corners.to_vec();
+            v.push((
+                format!("{shape} ({points})"),
+                Box::new(move |u| {
+                    l1.sampler(points, LightChoice::Power)
+                        .sample(p, normal, 0.5, u)
+                        .map(|s| s.wi)
+                }),
+                Box::new(move |w: Vec3| {
+                    // the point of the light plane in direction w, if it lies on the light
+                    if w.z >= 0.0 {
+                        return 0.0;
+                    }
+                    let y = p + w * (-p.z / w.z);
+                    let k = corners.len();
+                    let inside = (0..k).all(|i| {
+                        let (a, b) = (corners[i], corners[(i + 1) % k]);
+                        (b - a).cross(y - a).z >= 0.0
+                    });
+                    if inside {
+                        l2.sampler(points, LightChoice::Power).pdf(0, p, normal, y)
+                    } else {
+                        0.0
+                    }
+                }),
+                // fine quadrature, and a floor of half a sample per bin: the pdf steps to 0 at
+                // the light's outline, and a sliver of a bin it crosses must not expect nothing
+                Chi2Binning {
+                    pole,
+                    z_lo,
+                    quadrature: 24,
+                    floor: 0.5,
+                    ..Default::default()
+                },
+            ));
+        }
+    }
+    // a sky with a sun: sampled by luminance × sinθ
+    let (w, h) = (64u32, 32u32);
+    let sky: Vec<Vec3> = (0..w * h)
+        .map(|i| {
+            let (x, y) = ((i % w) as f32, (i / w) as f32);
+            let sun = if (x - 40.0).abs() < 1.5 && (y - 9.0).abs() < 1.5 {
+                400.0
+            } else {
+                0.0
+            };
+            Vec3::new(0.3, 0.5, 1.0) * (1.0 - y / h as f32) + Vec3::splat(sun)
+        })
+        .collect();
+    let map = std::rc::Rc::new(EnvMap::new(w, h, &sky, 0.0, 1.0).expect("the sky is valid"));
+    let (m1, m2) = (map.clone(), map);
+    v.push((
+        "environment map (luminance)".into(),
+        Box::new(move |u| m1.sample(u).map(|s| s.0)),
+        Box::new(move |d: Vec3| m2.pdf(d)),
+        // the pdf is constant on texels, which the bins do not follow: fine quadrature
+        Chi2Binning {
+            pole: Vec3::Y,
+            z_bins: 64,
+            phi_bins: 128,
+            quadrature: 24,
+            ..Default::default()
+        },
+    ));
+    v
+}
+
+/// Test every warp; write the picture and the JSON asked for.
+pub fn run(req: &WarptestRequest) -> Result<WarptestOutcome> {
+    let outputs: Vec<crate::image_io::NamedPath> = [("-o", &req.output), ("--json", &req.json)]
+        .into_iter()
+        .filter_map(|(f, p)| p.as_deref().map(|p| (f, p)))
+        .collect();
+    check_outputs(&outputs, &[])?;
+    if let Some(p) = &req.output {
+        check_image_path(p)?;
+    }
+    if let Some(p) = &req.json {
+        check_writable(p)?;
+    }
+    let rows: Vec<WarpRow> = warps()
+        .into_iter()
+        .enumerate()
+        .map(|(k, (name, sample, pdf, b))| {
+            let mut s = IndependentSampler::new(req.seed.wrapping_add(k as u64));
+            let mut i = 0u32;
+            let points = move || {
+                s.start_pixel_sample(UVec2::ZERO, i);
+                i += 1;
+                s.next_2d()
+            };
+            let scale = req.pdf_scale;
+            let (r, obs, exp) =
+                chi2_directions_binned(sample, |w| scale * pdf(w), points, req.n as usize, &b);
+            WarpRow {
+                warp: name,
+                chi2: r.statistic,
+                dof: r.dof,
+                p_value: r.p_value,
+                pdf_integral: r.pdf_integral,
+                bins: (obs, exp, (b.phi_bins as u32, b.z_bins as u32)),
+            }
+        })
+        .collect();
+    let mut written = Vec::new();
+    if let Some(p) = &req.output {
+        // every row at one binning (nearest bin), so the rows align
+        let (w, h) = (80, 40);
+        let rows_px = resampled(&rows, (w, h));
+        let view: Vec<(String, &[f64], &[f64])> = rows_px
+            .iter()
+            .map(|(l, a, b)| (l.clone(), &a[..], &b[..]))
+            .collect();
+        crate::analysis::plots::write_density_rows(p, &view, (w, h))?;
+        written.push(p.clone());
+    }
+    if let Some(p) = &req.json {
+        let text = serde_json::to_string_pretty(&rows)
+            .map_err(|e| Error::Settings(format!("--json: {e}")))?;
+        write_bytes(p, text.as_bytes())?;
+        written.push(p.clone());
+    }
+    Ok(WarptestOutcome { rows, written })
+}
+
+/// Each row's bins resampled (nearest bin) to `w × h`, so the picture's rows align.
+fn resampled(rows: &[WarpRow], (w, h): (u32, u32)) -> Vec<(String, Vec<f64>, Vec<f64>)> {
+    rows.iter()
+        .map(|r| {
+            let (rw, rh) = r.bins.2;
+            let pick = |v: &[f64]| -> Vec<f64> {
+                (0..w * h)
+                    .map(|k| {
+                        let (x, y) = (k % w, k / w);
+                        v[((y * rh / h) * rw + x * rw / w) as usize]
+                    })
+                    .collect()
+            };
+            (
+                format!(
+                    "{}: p = {:.3}, ∫pdf = {:.4}",
+                    r.warp, r.p_value, r.pdf_integral
+                ),
+                pick(&r.bins.0),
+                pick(&r.bins.1),
+            )
+        })
+        .collect()
+}
+
+/// Every warp's row, and the files written.
+#[derive(Clone, Debug)]
+pub struct WarptestOutcome {
+    pub rows: Vec<WarpRow>,
+    pub written: Vec<PathBuf>,
+}
+
+impl WarptestOutcome {
+    /// The rows as a table for the terminal.
+    pub fn table(&self) -> String {
+        table(&self.rows)
+    }
+}
+
+/// `rows` as a table for the terminal.
+pub fn table(rows: &[WarpRow]) -> String {
+    let mut s = format!(
+        "{:<44} {:>12} {:>6} {:>10} {:>10}\n",
+        "warp", "chi2", "dof", "p", "∫pdf"
+    );
+    for r in rows {
+        s += &format!(
+            "{:<44} {:>12.1} {:>6} {:>10.4} {:>10.5}\n",
+            r.warp, r.chi2, r.dof, r.p_value, r.pdf_integral
+        );
+    }
+    s
+}
