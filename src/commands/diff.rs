@@ -68,11 +68,7 @@ pub fn max_relative_difference(a: &[Vec3], b: &[Vec3]) -> f32 {
 
 /// Read both images, compute the metrics, write what was asked for.
 pub fn run(req: &DiffRequest) -> Result<DiffOutcome> {
-    let outputs: Vec<crate::image_io::NamedPath> =
-        [("--error-map", &req.error_map), ("--report", &req.report)]
-            .into_iter()
-            .filter_map(|(f, p)| p.as_deref().map(|p| (f, p)))
-            .collect();
+    let outputs = super::given(&[("--error-map", &req.error_map), ("--report", &req.report)]);
     let mut inputs = vec![
         ("IMAGE", req.image.as_path()),
         ("REFERENCE", req.reference.as_path()),

@@ -138,14 +138,11 @@ fn prepare_common(
     for p in [&a.csv, &a.json, &a.report].into_iter().flatten() {
         check_writable(p)?;
     }
-    let mut outputs: Vec<NamedPath> = [
+    let mut outputs = super::given(&[
         ("--csv", &a.csv),
         ("--json", &a.json),
         ("--report", &a.report),
-    ]
-    .into_iter()
-    .filter_map(|(f, p)| p.as_deref().map(|p| (f, p)))
-    .collect();
+    ]);
     outputs.extend_from_slice(more.0);
     let mut inputs = vec![
         ("SCENE", a.scene.as_path()),

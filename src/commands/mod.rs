@@ -46,6 +46,24 @@ pub fn resolve_regions(
     Ok(all)
 }
 
+/// The paths among `flags` that were given, each with its flag (for
+/// [`crate::image_io::check_outputs`]).
+pub(crate) fn given<'a>(
+    flags: &[(&'a str, &'a Option<PathBuf>)],
+) -> Vec<crate::image_io::NamedPath<'a>> {
+    flags
+        .iter()
+        .filter_map(|&(f, p)| p.as_deref().map(|p| (f, p)))
+        .collect()
+}
+
+/// Write `value` to `path` as pretty JSON (atomically).
+pub(crate) fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> Result<()> {
+    let text = serde_json::to_string_pretty(value)
+        .map_err(|e| Error::Settings(format!("{}: {e}", path.display())))?;
+    crate::image_io::write_bytes(path, text.as_bytes())
+}
+
 /// A file a command wrote, and what it holds (for the binary to say so).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Written {

@@ -10,7 +10,7 @@ use crate::analysis::points::{
     radial_spectrum,
 };
 use crate::error::{Error, Result};
-use crate::image_io::{check_outputs, check_writable, write_bytes, Format};
+use crate::image_io::{check_outputs, check_writable, Format};
 use crate::render::{independent, sobol, stratified};
 use crate::sampler::SamplerKind;
 use glam::{UVec2, Vec2};
@@ -140,11 +140,10 @@ pub fn realisations(kind: SamplerKind, seed: u64, n: u32, dim: usize, m: u32) ->
 
 /// Draw and measure every sampler's sets; write the picture and the JSON asked for.
 pub fn run(req: &PointsRequest) -> Result<PointsOutcome> {
-    let outputs: Vec<crate::image_io::NamedPath> = [("-o", &req.output), ("--json", &req.json)]
-        .into_iter()
-        .filter_map(|(f, p)| p.as_deref().map(|p| (f, p)))
-        .collect();
-    check_outputs(&outputs, &[])?;
+    check_outputs(
+        &super::given(&[("-o", &req.output), ("--json", &req.json)]),
+        &[],
+    )?;
     if let Some(p) = &req.output {
         let svg = p.extension().is_some_and(|e| e.eq_ignore_ascii_case("svg"));
         if !svg {
@@ -189,9 +188,7 @@ pub fn run(req: &PointsRequest) -> Result<PointsOutcome> {
         written.push(p.clone());
     }
     if let Some(p) = &req.json {
-        let text = serde_json::to_string_pretty(&rows)
-            .map_err(|e| Error::Settings(format!("--json: {e}")))?;
-        write_bytes(p, text.as_bytes())?;
+        super::write_json(p, &rows)?;
         written.push(p.clone());
     }
     Ok(PointsOutcome { rows, written })

@@ -10,8 +10,8 @@
 //! with a sun, built here). `--pdf-scale` multiplies every pdf, to see a wrong one caught.
 
 use crate::environment::EnvMap;
-use crate::error::{Error, Result};
-use crate::image_io::{check_image_path, check_outputs, check_writable, write_bytes};
+use crate::error::Result;
+use crate::image_io::{check_image_path, check_outputs, check_writable};
 use crate::lights::{Emitter, LightChoice, LightPoints, Lights};
 use crate::sampler::{IndependentSampler, Sampler};
 use crate::sampling::{
@@ -218,11 +218,10 @@ fn warps() -> Vec<Warp> {
 
 /// Test every warp; write the picture and the JSON asked for.
 pub fn run(req: &WarptestRequest) -> Result<WarptestOutcome> {
-    let outputs: Vec<crate::image_io::NamedPath> = [("-o", &req.output), ("--json", &req.json)]
-        .into_iter()
-        .filter_map(|(f, p)| p.as_deref().map(|p| (f, p)))
-        .collect();
-    check_outputs(&outputs, &[])?;
+    check_outputs(
+        &super::given(&[("-o", &req.output), ("--json", &req.json)]),
+        &[],
+    )?;
     if let Some(p) = &req.output {
         check_image_path(p)?;
     }
@@ -266,9 +265,7 @@ pub fn run(req: &WarptestRequest) -> Result<WarptestOutcome> {
         written.push(p.clone());
     }
     if let Some(p) = &req.json {
-        let text = serde_json::to_string_pretty(&rows)
-            .map_err(|e| Error::Settings(format!("--json: {e}")))?;
-        write_bytes(p, text.as_bytes())?;
+        super::write_json(p, &rows)?;
         written.push(p.clone());
     }
     Ok(WarptestOutcome { rows, written })
