@@ -231,8 +231,8 @@ impl ErrorEstimate {
         let how = match self.method {
             Method::Replicates(r) => format!("from {r} replicates"),
             Method::PerSample => {
-                "per sample (s²/n: one set of points; an upper bound for stratified and Sobol points, \
-                 --replicates 4 for an honest estimate)"
+                "per sample: s²/n of one set of points, an upper bound for stratified and Sobol \
+                 points; --replicates 4 for an honest estimate"
                     .into()
             }
             Method::Undefined => {
