@@ -40,6 +40,8 @@ pub enum Command {
     Converge(ConvergeArgs),
     /// Draw a sampler's points in the unit square, with their discrepancy and power spectrum.
     Points(vrpt::commands::points::PointsRequest),
+    /// Estimate known integrals with each sampler: measured mean and variance against the formulas.
+    Integrate(vrpt::commands::integrate::IntegrateRequest),
     /// Test every warp's samples against its integrated pdf: chi-square, p-value and ∫pdf.
     Warptest(vrpt::commands::warptest::WarptestRequest),
     /// Show what path guiding learned at a pixel's first hit, beside the incident radiance there.
@@ -265,6 +267,7 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
         Command::Compare(args) => ok(run_compare(args)),
         Command::Converge(args) => ok(run_converge(args)),
         Command::Points(r) => ok(vrpt::commands::points::run(&r).map(|o| out(&o.table()))),
+        Command::Integrate(r) => ok(vrpt::commands::integrate::run(&r).map(|o| out(&o.table()))),
         Command::Warptest(r) => ok(vrpt::commands::warptest::run(&r).map(|o| out(&o.table()))),
         Command::Guide { request, strategy } => ok(run_guide(request, strategy)),
     }

@@ -9,6 +9,7 @@
 //! - [`fit`]: least-squares lines and log-log slopes;
 //! - [`plots`]: log-log convergence plots (SVG/PNG) and labelled image grids (PNG);
 //! - [`points`]: a sampler's points in the unit square, their discrepancy and spectrum;
+//! - [`integrate`]: known-answer integrals by each sampler, against the variance formulas;
 //! - [`report`]: the self-contained HTML report of compare, converge and diff.
 
 #![warn(missing_docs)]
@@ -16,6 +17,7 @@
 pub mod calibration;
 pub mod experiments;
 pub mod fit;
+pub mod integrate;
 pub mod merge;
 pub mod metrics;
 pub mod plots;

@@ -10,11 +10,13 @@
 //! - [`experiment`]: `compare` and `converge`, with their CSV, JSON, grid, plots and report;
 //! - [`guide`]: what path guiding learned at one point, beside the incident radiance there;
 //! - [`points`]: a sampler's points in the unit square, their discrepancy and spectrum;
+//! - [`integrate`]: known-answer integrals by each sampler against the variance formulas;
 //! - [`warptest`]: every warp's samples against its integrated pdf, chi-square and ∫pdf.
 
 pub mod diff;
 pub mod experiment;
 pub mod guide;
+pub mod integrate;
 pub mod merge;
 pub mod points;
 pub mod render;

@@ -1008,3 +1008,54 @@ fn points_draws_the_sets_and_writes_their_numbers() {
         "not a 2D dimension",
     );
 }
+
+/// Issue 37: `vrpt integrate` writes a row per integrand × sampler × directions × N with the
+/// fields the issue names, and covariance rows with their pair; independent rows predict σ²/N.
+#[test]
+fn integrate_writes_its_rows() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("i.json");
+    let out = vrpt(&[
+        "integrate",
+        "--integrand",
+        "smooth,lobe",
+        "--n",
+        "16,64",
+        "--repetitions",
+        "500",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let rows: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let rows = rows.as_array().unwrap();
+    // smooth: 1 domain, lobe: 3; × 3 samplers × 2 N, plus a covariance row per (…, sampler)
+    assert_eq!(rows.len(), 4 * 3 * 2 + 4 * 3);
+    for r in rows {
+        for key in [
+            "integrand",
+            "sampler",
+            "directions",
+            "n",
+            "repetitions",
+            "exact",
+        ] {
+            assert!(r.get(key).is_some(), "{key} missing in {r}");
+        }
+        let measured = ["mean", "mean_ci", "variance", "variance_ci"];
+        let cov = ["pair", "covariance", "covariance_ci"];
+        assert!(
+            measured.iter().all(|k| r.get(*k).is_some()) || cov.iter().all(|k| r.get(*k).is_some()),
+            "{r}"
+        );
+    }
+    assert!(rows
+        .iter()
+        .filter(|r| r["sampler"] == "independent" && r.get("variance").is_some())
+        .all(|r| r["prediction"] == "sigma2/N" && r.get("predicted_variance").is_some()));
+}
