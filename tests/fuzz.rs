@@ -351,32 +351,24 @@ fn readers_survive_mutated_inputs() {
                 vrpt::image_io::read_exr(&p)
                     .and_then(|img| vrpt::output::RenderMetadata::from_image(&img, &p).map(|_| ()))
             }
-            Target::Png => {
-                // the seed scene, its first material textured by the mutated PNG
-                let mut bytes = apply(png.clone(), &edits, &seeds);
-                if let Some((w, h)) = lie {
-                    bytes = lie_about_size(png.clone(), w % 100_000 + 1, h % 100_000 + 1);
-                }
-                std::fs::write(case.join("tex.png"), bytes).unwrap();
-                let mtl = String::from_utf8_lossy(&files[1]).replacen(
-                    "\nKd ",
-                    "\nmap_Kd tex.png\nKd ",
-                    1,
-                );
-                let obj_file = obj_name
-                    .trim()
-                    .trim_start_matches('=')
-                    .trim()
-                    .trim_matches('"');
-                std::fs::write(case.join(obj_file), &files[0]).unwrap();
-                std::fs::write(case.join(&mtl_name), mtl.as_bytes()).unwrap();
-                std::fs::write(case.join("scene.toml"), &files[2]).unwrap();
-                LARGEST.store(0, Ordering::Relaxed);
-                load_and_render(&case)
-            }
             t => {
-                let i = t as usize;
-                files[i] = apply(std::mem::take(&mut files[i]), &edits, &seeds);
+                if matches!(t, Target::Png) {
+                    // the seed scene, its first material textured by the mutated PNG
+                    let mut bytes = apply(png.clone(), &edits, &seeds);
+                    if let Some((w, h)) = lie {
+                        bytes = lie_about_size(png.clone(), w % 100_000 + 1, h % 100_000 + 1);
+                    }
+                    std::fs::write(case.join("tex.png"), bytes).unwrap();
+                    let mtl = String::from_utf8_lossy(&files[1]).replacen(
+                        "\nKd ",
+                        "\nmap_Kd tex.png\nKd ",
+                        1,
+                    );
+                    files[1] = mtl.into_bytes();
+                } else {
+                    let i = t as usize;
+                    files[i] = apply(std::mem::take(&mut files[i]), &edits, &seeds);
+                }
                 let obj_file = obj_name
                     .trim()
                     .trim_start_matches('=')
