@@ -1,0 +1,209 @@
+//! Guide training: the iterations of a guided render before its final one (doubling spp,
+//! each sampling with the tree the earlier ones taught), rendered in chunks of bounded size whose
+//! records reach the tree in a fixed order, so the tree is a function of the seed alone and
+//! training memory does not grow with the spp.
+
+use super::*;
+
+/// The training iterations of a guided render (see [`crate::guiding`]): iterations of 1, 2,
+/// 4, … spp, each sampling with the tree the previous ones taught and recording into the next,
+/// while their sum stays within half the render's spp (at least one iteration), and with a time
+/// limit while the next iteration (estimated at twice the last) would end within a third of it.
+/// Iteration `k` uses seed `mix64(seed ⊕ (k + 1)·φ)`, whatever the render's first sample or
+/// shard: every shard of a render learns the same tree. A set stop flag ends the training.
+/// Training's rays and thread time are added to `stats`, and its [`GuideStats`] set there.
+pub(super) fn train_guide<F: SamplerFactory>(
+    (scene, camera, settings, plan): (&Scene, &Camera, &RenderSettings, &PassPlan),
+    factory: &F,
+    start: Instant,
+    stats: &mut RenderStats,
+) -> SdTree {
+    let (lo, hi) = scene_bounds(scene);
+    let mut tree = SdTree::new(lo, hi);
+    let budget = (settings.spp as u64 / 2).max(1);
+    let tiles = tile_count(settings);
+    let mut g = GuideStats::default();
+    let mut last = Duration::ZERO;
+    for k in 0u32..32 {
+        let spp = 1u64 << k;
+        if k > 0 {
+            let over_time = plan
+                .time_limit
+                .is_some_and(|t| start.elapsed() + 2 * last > t / 3);
+            let stopped = plan.stop.is_some_and(|f| f.load(Ordering::Relaxed));
+            if g.training_spp + spp > budget || over_time || stopped {
+                break;
+            }
+        }
+        let began = Instant::now();
+        let iteration = RenderSettings {
+            seed: crate::math::mix64(
+                settings.seed ^ (k as u64 + 1).wrapping_mul(0x9e37_79b9_7f4a_7c15),
+            ),
+            ..settings.clone()
+        };
+        let set = SamplePass {
+            origin: 0,
+            size: spp as u32,
+        };
+        let mut stopped = false;
+        for (tile_range, samples) in training_chunks(tiles, spp) {
+            let pieces = sample_pieces(&tile_range, samples);
+            let results: Vec<(RenderStats, bool, Vec<Record>)> = pieces
+                .into_par_iter()
+                .map(|range| {
+                    render_with(
+                        scene,
+                        camera,
+                        &iteration,
+                        factory,
+                        (set, range, tile_range.clone(), plan.stop, None),
+                        Guide {
+                            tree: Some(&tree),
+                            record: true,
+                        },
+                        None,
+                        &NoProgress,
+                    )
+                })
+                .collect();
+            stopped |= results.iter().any(|r| r.1);
+            if stopped {
+                break; // a cut chunk's records are dropped, and training ends
+            }
+            // piece by piece, in order: a leaf sees the records in the same order as from
+            // their concatenation, without a copy of them all
+            for (s, _, records) in results {
+                stats.rays.add(&s.rays);
+                stats.thread_time += s.thread_time;
+                tree.add_records(records);
+            }
+        }
+        if stopped {
+            break;
+        }
+        tree.finish_iteration(k);
+        g.iterations += 1;
+        g.training_spp += spp;
+        last = began.elapsed();
+    }
+    g.training = start.elapsed();
+    stats.guide = Some(g);
+    tree
+}
+
+/// Path samples a training chunk renders at most: its records (about 16 bytes per bounce)
+/// are the training's memory, at most `16 B × max depth × 2¹⁸` (40 MiB at depth 10, twice
+/// that while a piece is sorted into the tree) whatever the spp and the image size.
+const TRAINING_CHUNK: u64 = 1 << 18;
+
+/// The chunks of a training iteration of `spp` samples per pixel over `tiles` tiles, in the
+/// order their records reach the tree: runs of whole tiles with all their samples while a
+/// tile's samples fit in [`TRAINING_CHUNK`], else each tile in slices of samples. The split
+/// depends on the image and the spp only, so the tree is the same for any thread count.
+fn training_chunks(tiles: u32, spp: u64) -> Vec<(Range<u32>, Range<u64>)> {
+    let per_tile = spp * (TILE * TILE) as u64;
+    if per_tile <= TRAINING_CHUNK {
+        let n = (TRAINING_CHUNK / per_tile) as u32;
+        (0..tiles)
+            .step_by(n as usize)
+            .map(|t| (t..(t + n).min(tiles), 0..spp))
+            .collect()
+    } else {
+        let slice = TRAINING_CHUNK / (TILE * TILE) as u64;
+        (0..tiles)
+            .flat_map(|t| {
+                (0..spp)
+                    .step_by(slice as usize)
+                    .map(move |s| (t..t + 1, s..(s + slice).min(spp)))
+            })
+            .collect()
+    }
+}
+
+/// A chunk of fewer than 8 tiles is rendered as 8 consecutive slices of its samples side by
+/// side (threads work over tiles, so a chunk of one tile kept one core busy); their records
+/// follow in slice order. A fixed count, not the threads', keeps the tree thread-independent.
+fn sample_pieces(tiles: &Range<u32>, samples: Range<u64>) -> Vec<Range<u64>> {
+    const PIECES: u64 = 8;
+    let n = samples.end - samples.start;
+    if tiles.len() >= PIECES as usize || n < 2 {
+        return vec![samples];
+    }
+    let k = PIECES.min(n);
+    (0..k)
+        .map(|i| samples.start + n * i / k..samples.start + n * (i + 1) / k)
+        .collect()
+}
+
+/// The guide a guided render of `scene` with `settings` learns before its final iteration (the
+/// same seeds and budget: the same tree), with the training's stats.
+pub fn learn_guide(scene: &Scene, settings: &RenderSettings) -> Result<(SdTree, RenderStats)> {
+    let camera = camera_for(scene, settings)?;
+    let plan = PassPlan::default();
+    with_threads(settings.threads, || {
+        let mut stats = RenderStats::default();
+        let start = Instant::now();
+        let c = (scene, &camera, settings, &plan);
+        let tree = match settings.strategy.sampler {
+            SamplerKind::Independent => train_guide(c, &independent, start, &mut stats),
+            SamplerKind::Stratified => train_guide(c, &stratified, start, &mut stats),
+            SamplerKind::Sobol => train_guide(c, &sobol, start, &mut stats),
+        };
+        stats.elapsed = start.elapsed();
+        (tree, stats)
+    })
+}
+
+/// The bounding box of the scene's triangles.
+fn scene_bounds(scene: &Scene) -> (glam::Vec3, glam::Vec3) {
+    let (mut lo, mut hi) = (
+        glam::Vec3::splat(f32::INFINITY),
+        glam::Vec3::splat(-f32::INFINITY),
+    );
+    for prim in 0..scene.accel.len() as u32 {
+        for v in scene.accel.vertices(prim) {
+            lo = lo.min(v);
+            hi = hi.max(v);
+        }
+    }
+    if lo.cmple(hi).all() {
+        (lo, hi)
+    } else {
+        (glam::Vec3::ZERO, glam::Vec3::ONE)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Guided training's memory is bounded whatever the spp (issue 34: a 16×16 door at 262,144
+    /// spp peaked at 1.9 GB): every chunk renders at most `TRAINING_CHUNK` path samples, the
+    /// chunks cover every (tile, sample) once in order, and a chunk of few tiles is split into
+    /// slices of samples that run side by side (one tile kept one core busy) and cover it.
+    #[test]
+    fn training_chunks_bound_the_records_and_cover_every_sample() {
+        for tiles in [1u32, 3, 7, 8, 9, 192, 8100] {
+            for k in [0u32, 4, 9, 10, 12, 13, 16, 18] {
+                let spp = 1u64 << k;
+                let chunks = training_chunks(tiles, spp);
+                let mut covered = 0u64;
+                let mut last = (0u32, 0u64);
+                for (t, s) in &chunks {
+                    let n = t.len() as u64 * (s.end - s.start) * (TILE * TILE) as u64;
+                    assert!(n <= TRAINING_CHUNK, "{n} path samples in a chunk");
+                    assert!((t.start, s.start) >= last, "chunks in order");
+                    last = (t.start, s.start);
+                    let pieces = sample_pieces(t, s.clone());
+                    assert_eq!(pieces.first().unwrap().start, s.start);
+                    assert_eq!(pieces.last().unwrap().end, s.end);
+                    assert!(pieces.windows(2).all(|w| w[0].end == w[1].start));
+                    assert!(t.len() >= 8 || s.end - s.start < 2 || pieces.len() == 8);
+                    covered += t.len() as u64 * (s.end - s.start);
+                }
+                assert_eq!(covered, tiles as u64 * spp, "{tiles} tiles at {spp} spp");
+            }
+        }
+    }
+}
