@@ -1,0 +1,270 @@
+//! The directional quadtree of a guide leaf: its energies per quadrant, its density and sampling
+//! by hierarchical warping, recording, and refinement (see the parent module's doc).
+
+use super::{canonical_to_dir, dir_to_canonical, MAX_QUAD_DEPTH, MAX_QUAD_NODES};
+use crate::sampling::ONE_MINUS_EPSILON;
+use glam::{Vec2, Vec3};
+use std::f32::consts::PI;
+
+/// A quadtree node: per quadrant (bit 0: the upper half in `u`, bit 1: the upper half in `v`)
+/// the energy recorded there and its child node (0: the quadrant is a leaf; the root, node 0,
+/// is nobody's child).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct QNode {
+    sum: [f32; 4],
+    child: [u32; 4],
+}
+
+impl QNode {
+    /// The quadrant of `p` (in the node's `[0,1)²`), and `p` in the quadrant's own `[0,1)²`.
+    #[inline]
+    fn quadrant(p: Vec2) -> (usize, Vec2) {
+        let (ix, x) = if p.x < 0.5 {
+            (0, p.x * 2.0)
+        } else {
+            (1, (p.x - 0.5) * 2.0)
+        };
+        let (iy, y) = if p.y < 0.5 {
+            (0, p.y * 2.0)
+        } else {
+            (1, (p.y - 0.5) * 2.0)
+        };
+        (ix | iy << 1, Vec2::new(x, y))
+    }
+
+    fn total(&self) -> f32 {
+        self.sum.iter().sum()
+    }
+}
+
+/// A directional quadtree: the learned distribution of one S-tree leaf (see the module doc).
+#[derive(Clone, Debug, PartialEq)]
+pub struct DTree {
+    nodes: Vec<QNode>,
+    /// The root's energy once built (0 before, or when nothing was recorded).
+    total: f32,
+}
+
+impl Default for DTree {
+    fn default() -> Self {
+        DTree {
+            nodes: vec![QNode::default()],
+            total: 0.0,
+        }
+    }
+}
+
+impl DTree {
+    /// A built quadtree from explicit nodes (per node, per quadrant — bit 0 the upper half in u, bit 1 in v — its energy and its child, 0 for none):
+    /// for tests of the sampling routines on hand-made trees. Each node's `(sum, child)` pairs
+    /// are per quadrant; a quadrant with a child gets its energy from the child.
+    pub fn from_nodes(nodes: &[([f32; 4], [u32; 4])]) -> DTree {
+        let mut t = DTree {
+            nodes: nodes
+                .iter()
+                .map(|&(sum, child)| QNode { sum, child })
+                .collect(),
+            total: 0.0,
+        };
+        t.build();
+        t
+    }
+
+    /// The energy recorded in all (a positive total means the tree can be sampled).
+    pub fn total(&self) -> f32 {
+        self.total
+    }
+
+    /// Number of quadtree nodes.
+    pub fn node_count(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// Bytes of its nodes.
+    pub fn memory_bytes(&self) -> usize {
+        self.nodes.capacity() * std::mem::size_of::<QNode>()
+    }
+
+    /// Depth of the deepest leaf (1: the root's quadrants are leaves).
+    pub fn depth(&self) -> u32 {
+        fn go(t: &DTree, n: usize) -> u32 {
+            1 + t.nodes[n]
+                .child
+                .iter()
+                .filter(|&&c| c != 0)
+                .map(|&c| go(t, c as usize))
+                .max()
+                .unwrap_or(0)
+        }
+        go(self, 0)
+    }
+
+    /// The density at canonical point `p` per unit area of the square (integrates to 1 over
+    /// it); uniform (1) when the tree holds no energy.
+    #[inline]
+    pub fn pdf_canonical(&self, mut p: Vec2) -> f32 {
+        if self.total <= 0.0 {
+            return 1.0;
+        }
+        let mut pdf = 1.0;
+        let mut n = 0usize;
+        loop {
+            let node = &self.nodes[n];
+            let (i, q) = QNode::quadrant(p);
+            let s = node.sum[i];
+            if s <= 0.0 {
+                return 0.0;
+            }
+            pdf *= 4.0 * s / node.total();
+            if node.child[i] == 0 {
+                return pdf;
+            }
+            n = node.child[i] as usize;
+            p = q;
+        }
+    }
+
+    /// The density of direction `d` (unit, world) per unit solid angle: `pdf_canonical / 4π`.
+    #[inline]
+    pub fn pdf(&self, d: Vec3) -> f32 {
+        self.pdf_canonical(dir_to_canonical(d)) * (0.25 / PI)
+    }
+
+    /// A canonical point drawn with density [`DTree::pdf_canonical`] from `u ∈ [0,1)²`, by
+    /// hierarchical warping (`u` itself when the tree holds no energy).
+    #[inline]
+    pub fn sample_canonical(&self, mut u: Vec2) -> Vec2 {
+        if self.total <= 0.0 {
+            return u;
+        }
+        let (mut origin, mut size) = (Vec2::ZERO, 1.0f32);
+        let mut n = 0usize;
+        loop {
+            let s = self.nodes[n].sum;
+            let left = s[0] + s[2];
+            let total = left + s[1] + s[3];
+            let p_left = left / total;
+            let ix = if u.x < p_left {
+                u.x /= p_left;
+                0
+            } else {
+                u.x = (u.x - p_left) / (1.0 - p_left);
+                1
+            };
+            let (lo, hi) = (s[ix], s[ix + 2]);
+            let p_low = lo / (lo + hi);
+            let iy = if u.y < p_low {
+                u.y /= p_low;
+                0
+            } else {
+                u.y = (u.y - p_low) / (1.0 - p_low);
+                1
+            };
+            u = u.clamp(Vec2::ZERO, Vec2::splat(ONE_MINUS_EPSILON));
+            size *= 0.5;
+            origin += Vec2::new(ix as f32, iy as f32) * size;
+            let i = ix | iy << 1;
+            let c = self.nodes[n].child[i];
+            if c == 0 {
+                return (origin + u * size).min(Vec2::splat(ONE_MINUS_EPSILON));
+            }
+            n = c as usize;
+        }
+    }
+
+    /// A direction (unit, world) drawn with density [`DTree::pdf`].
+    #[inline]
+    pub fn sample(&self, u: Vec2) -> Vec3 {
+        canonical_to_dir(self.sample_canonical(u))
+    }
+
+    /// Add `value` to the leaf quadrant holding canonical point `p`.
+    #[inline]
+    pub(super) fn record(&mut self, mut p: Vec2, value: f32) {
+        let mut n = 0usize;
+        loop {
+            let (i, q) = QNode::quadrant(p);
+            let c = self.nodes[n].child[i];
+            if c == 0 {
+                self.nodes[n].sum[i] += value;
+                return;
+            }
+            n = c as usize;
+            p = q;
+        }
+    }
+
+    /// Sum the leaves' energies up to the root (children have higher indices than their
+    /// parents, so one pass from the back does it).
+    pub(super) fn build(&mut self) {
+        for n in (0..self.nodes.len()).rev() {
+            for i in 0..4 {
+                let c = self.nodes[n].child[i];
+                if c != 0 {
+                    self.nodes[n].sum[i] = self.nodes[c as usize].total();
+                }
+            }
+        }
+        let total = self.nodes[0].total();
+        self.total = if total.is_finite() && total > 0.0 {
+            total
+        } else {
+            0.0
+        };
+    }
+
+    /// An empty tree whose quadrants are split where this (built) tree held more than `rho` of
+    /// its energy (a quadrant this tree did not split goes on splitting with a quarter of its
+    /// energy per child, as the authors' code does), at most [`MAX_QUAD_DEPTH`] deep.
+    pub(super) fn refined(&self, rho: f32) -> DTree {
+        let mut out = DTree::default();
+        let total = self.total;
+        // (node of `out`, the energies of the matching region's quadrants, their children in
+        // `self` (0: none), depth)
+        let mut stack = vec![(0usize, self.nodes[0].sum, self.nodes[0].child, 1u32)];
+        while let Some((n, sums, children, depth)) = stack.pop() {
+            for i in 0..4 {
+                let fraction = if total > 0.0 {
+                    sums[i] / total
+                } else {
+                    0.25f32.powi(depth as i32)
+                };
+                if depth < MAX_QUAD_DEPTH && fraction > rho && out.nodes.len() < MAX_QUAD_NODES {
+                    let c = out.nodes.len();
+                    out.nodes.push(QNode::default());
+                    out.nodes[n].child[i] = c as u32;
+                    let (s, ch) = match children[i] {
+                        0 => ([sums[i] * 0.25; 4], [0; 4]),
+                        k => (self.nodes[k as usize].sum, self.nodes[k as usize].child),
+                    };
+                    stack.push((c, s, ch, depth + 1));
+                }
+            }
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::guiding::ENERGY_FRACTION;
+
+    /// Refinement splits where the energy is, and the refined tree's records build sums that
+    /// add up.
+    #[test]
+    fn refine_and_build() {
+        let mut t = DTree::default();
+        for k in 0..1000 {
+            let p = Vec2::new(0.1 + 0.001 * (k % 10) as f32, 0.8);
+            t.record(p, 1.0);
+        }
+        t.record(Vec2::new(0.9, 0.1), 1.0);
+        t.build();
+        assert_eq!(t.total(), 1001.0);
+        let r = t.refined(ENERGY_FRACTION);
+        assert!(r.node_count() > 4, "{}", r.node_count());
+        assert!(r.depth() >= 4);
+        assert_eq!(r.total(), 0.0);
+    }
+}

@@ -1,0 +1,176 @@
+//! Path guiding: the SD-tree of Müller, Gross & Novák 2017, "Practical Path Guiding for
+//! Efficient Light-Transport Simulation" — a learned estimate of the radiance arriving at each
+//! region of the scene from each direction, which `--directions guided` samples from.
+//!
+//! **The tree.** A binary tree over the scene's bounding cube (the *S-tree*), split at the
+//! middle along x, y, z in turn; each of its leaves holds a quadtree over the sphere of
+//! directions (the *D-tree*) in the cylindrical equal-area map
+//! `(u, v) = ((cosθ + 1)/2, φ/2π)` (world axes, θ from +z), which maps solid angle to area
+//! uniformly: `dω = 4π du dv`. A quadtree node holds, per quadrant, the sum of the radiance
+//! estimates recorded in it. Its sampling density is piecewise constant on the leaves, in
+//! proportion to the recorded energy: descending, quadrant `i` is taken with probability
+//! `s_i / Σs`, so `p(u, v) = Π 4 s_i/Σs` along the path and `p(ω) = p(u, v) / 4π` per unit solid
+//! angle ([`DTree::pdf`]); [`DTree::sample`] draws from it by hierarchical warping of one 2D
+//! point (the x half by `u.x`, then the y half of that column by `u.y`, each rescaled to
+//! `[0, 1)` and used again below), and the point inside the last leaf is the rescaled `u`.
+//!
+//! **Learning.** Training renders iterations of 1, 2, 4, … samples per pixel. Iteration `k`
+//! samples with the D-trees built from iteration `k − 1` and records, at every bounce of every
+//! path, the radiance that arrived along the sampled direction: the path's radiance gathered
+//! after the bounce divided by the throughput up to and including it, `L_i ≈ ΔL / β`, averaged
+//! over the three channels, divided by the direction's pdf (a one-sample estimate of the
+//! radiance integral over the quadrant it falls in). Emission that the bounce's own ray hits
+//! is learned whole under `bsdf` and `mis` (under `mis` the estimator took the MIS weight `w`
+//! of it; the record adds the `1 − w` that next-event estimation was to carry), so the guide
+//! learns which part of a light is visible — what NEE, blind to occlusion, cannot know (the
+//! door's slit). Under `nee` it is left out: the estimator never counts a BSDF-sampled light.
+//! Each record also feeds the leaf's learner of `α` (Adam on the variance, see the sampling paragraph). After the
+//! iteration each leaf's quadtree is
+//! summed up to its root and becomes the leaf's sampling distribution; then an S-tree leaf that
+//! recorded more than `c·√(2^k)` samples ([`SPATIAL_THRESHOLD`] `c`) is halved until its halves
+//! have not (each half starts from a copy of the leaf's distribution), and each D-tree is
+//! rebuilt empty with a quadrant split where it held more than [`ENERGY_FRACTION`] `ρ` of its
+//! leaf's energy (at most [`MAX_QUAD_DEPTH`] levels).
+//!
+//! **Sampling** (the integrator): one-sample MIS between the BSDF's own strategy (the Phong
+//! lobes) and the guide, the guide chosen with probability `α`, learned per leaf from
+//! [`GUIDE_FRACTION`] on by stochastic gradient descent (Adam) on the variance of the mixture
+//! estimator, as in Müller's 2019 follow-up (a leaf that has learned nothing samples the guide
+//! uniformly over the sphere, as in the authors' code); the direction's pdf is the mixture
+//! `α·p_guide + (1−α)·p_bsdf`, and that mixture is the BSDF pdf NEE's and the light's MIS
+//! weights see. A guided direction below the surface is a failed sample, as for the Phong lobe.
+//!
+//! **Unbiased.** The image is the final iteration alone: the training iterations use their own
+//! seeds (the render's seed mixed with the iteration number), so the tree that samples the final
+//! iteration is a function of samples independent of the final ones. Given the tree, every final
+//! sample is an ordinary importance-sampled estimate with a pdf that is positive wherever the
+//! BSDF's is (`1 − α ≥ 0.5`), hence unbiased; averaging over trees keeps it so. Training samples
+//! are discarded: combining them with weights fixed in advance would also be unbiased, but the
+//! early iterations' variance is far higher and fixed weights cannot know by how much.
+//!
+//! **Deterministic.** Tiles record into their own buffers; after each chunk of tiles the records
+//! are put in tile order, stably sorted by S-tree leaf, and each leaf adds its own records in
+//! that order (leaves in parallel). So the learned tree — sums, splits, everything — is the same
+//! bits whatever the thread count or the order tiles finish in, and so is the image.
+
+mod dtree;
+mod fraction;
+mod stree;
+
+pub use dtree::DTree;
+pub use stree::{Leaf, SdTree, TreeSize};
+
+use crate::sampling::ONE_MINUS_EPSILON;
+use glam::{Vec2, Vec3};
+use std::f32::consts::PI;
+
+/// `α` of a leaf before it has learned its own: the probability of sampling the guide.
+pub const GUIDE_FRACTION: f32 = 0.5;
+
+/// `c`: an S-tree leaf that recorded more than `c·√(2^k)` samples in iteration `k` is split.
+/// The paper's value (measured on the door scene at 10 s: 1,000 and 4,000 learned no better).
+pub const SPATIAL_THRESHOLD: f64 = 12000.0;
+
+/// `ρ`: a quadrant is split when it holds more than this fraction of its D-tree's energy.
+pub const ENERGY_FRACTION: f32 = 0.01;
+
+/// Deepest a quadtree grows (a leaf at depth 20 spans 2^-20 of the square's side).
+pub const MAX_QUAD_DEPTH: u32 = 20;
+
+/// Most nodes of one quadtree (refinement stops adding nodes past it).
+pub const MAX_QUAD_NODES: usize = 1 << 16;
+
+/// The cylindrical equal-area coordinates `((cosθ + 1)/2, φ/2π)` of unit direction `d`.
+#[inline]
+pub fn dir_to_canonical(d: Vec3) -> Vec2 {
+    let cos_theta = d.z.clamp(-1.0, 1.0);
+    let mut phi = d.y.atan2(d.x);
+    if phi < 0.0 {
+        phi += 2.0 * PI;
+    }
+    Vec2::new(
+        ((cos_theta + 1.0) * 0.5).min(ONE_MINUS_EPSILON),
+        (phi * (0.5 / PI)).min(ONE_MINUS_EPSILON),
+    )
+}
+
+/// The unit direction of canonical point `p` (the inverse of [`dir_to_canonical`]).
+#[inline]
+pub fn canonical_to_dir(p: Vec2) -> Vec3 {
+    let cos_theta = 2.0 * p.x - 1.0;
+    let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
+    let (s, c) = (2.0 * PI * p.y).sin_cos();
+    Vec3::new(sin_theta * c, sin_theta * s, cos_theta)
+}
+
+/// One radiance record: the S-tree leaf of the vertex, the canonical point of the sampled
+/// direction, `L_i / p` (see the module doc), and what learning `α` needs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Record {
+    /// Index of the S-tree leaf the vertex lies in.
+    pub leaf: u32,
+    /// The direction, canonical.
+    pub point: Vec2,
+    /// The radiance estimate divided by the direction's pdf.
+    pub value: f32,
+    /// `L_i · f · cosθ` (channel average).
+    pub product: f32,
+    /// The pdf the direction was drawn with (the mixture).
+    pub pdf: f32,
+    /// Its BSDF and guide pdfs.
+    pub p_bsdf: f32,
+    pub p_guide: f32,
+}
+
+/// The guide at one vertex: the leaf's distribution and `α`.
+#[derive(Clone, Copy, Debug)]
+pub struct GuideAt<'a> {
+    /// The leaf's index.
+    pub leaf: u32,
+    /// Its sampling distribution.
+    pub dtree: &'a DTree,
+    /// The probability of sampling it.
+    pub alpha: f32,
+}
+
+impl<'a> GuideAt<'a> {
+    /// The guide at point `p` of `tree`.
+    #[inline]
+    pub fn new(tree: &'a SdTree, p: Vec3) -> Self {
+        let leaf = tree.leaf_at(p);
+        let dtree = tree.sampling(leaf);
+        GuideAt {
+            leaf,
+            dtree,
+            alpha: tree.leaves[leaf as usize].alpha,
+        }
+    }
+
+    /// The mixture pdf `α·p_guide(wi) + (1−α)·p_bsdf` of world direction `wi`.
+    #[inline]
+    pub fn mixture_pdf(&self, wi: Vec3, p_bsdf: f32) -> f32 {
+        self.mixture_pdf_canonical(dir_to_canonical(wi), p_bsdf).0
+    }
+
+    /// The mixture pdf of the direction of canonical point `c`, and the guide's pdf of it (per
+    /// unit solid angle).
+    #[inline]
+    pub fn mixture_pdf_canonical(&self, c: Vec2, p_bsdf: f32) -> (f32, f32) {
+        let p_guide = self.dtree.pdf_canonical(c) * (0.25 / PI);
+        (self.alpha * p_guide + (1.0 - self.alpha) * p_bsdf, p_guide)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn canonical_map_round_trips() {
+        for &(x, y) in &[(0.1f32, 0.2f32), (0.5, 0.5), (0.9, 0.99), (0.01, 0.7)] {
+            let p = Vec2::new(x, y);
+            let q = dir_to_canonical(canonical_to_dir(p));
+            assert!((p - q).abs().max_element() < 1e-5, "{p} {q}");
+        }
+    }
+}
