@@ -17,6 +17,9 @@ Writes eight scene folders, each holding NAME.obj, NAME.mtl and scene.toml:
   scenes/door/           Veach's door: a dark room lit only through a door
                          standing ajar from a brightly lit second room
                          (the path-guiding scene).
+  scenes/door-dark/      the door with room A darkened.
+  scenes/gap/            a dark room lit through a 12 cm gap (guiding's
+                         showcase).
   scenes/sun-sky/        blocks on a ground plane lit only by an HDR
                          lat-long environment (sky.exr, written here too): a
                          smooth sky and a small, bright sun disc (the
@@ -680,18 +683,26 @@ def night_hall():
 
 
 # ================================================================ 6. door
-def door():
+def door(name="door", dark=False):
     """Veach's "door" setting: room A (the camera's, no light) and room B (a
     bright ceiling light) share a wall at z = 0 whose doorway stands ajar:
     the door, hinged at its right post, is turned 12 degrees into room B, so
     light reaches room A only through a slit about 0.19 m wide.  A point in
     room A sees the light itself only from a thin wedge of floor behind the
     slit; next-event estimation elsewhere finds the light occluded, and BSDF
-    sampling finds the slit in a small fraction of its directions."""
-    name = "door"
+    sampling finds the slit in a small fraction of its directions.
+
+    dark=True (scenes/door-dark): room A's walls at albedo 0.25 and its floor
+    Kd 0.15 / Ks 0.1, so the broad multi-bounce light of room A, which cosine
+    sampling handles, no longer hides the light through the slit, which
+    path guiding exists to find."""
     m = Mesh(name)
-    m.material("wall", (0.7, 0.7, 0.68))
-    m.material("floor", (0.3, 0.25, 0.2), ks=(0.3, 0.3, 0.3), ns=60.0)
+    if dark:
+        m.material("wall", (0.25, 0.25, 0.24))
+        m.material("floor", (0.15, 0.125, 0.1), ks=(0.1, 0.1, 0.1), ns=60.0)
+    else:
+        m.material("wall", (0.7, 0.7, 0.68))
+        m.material("floor", (0.3, 0.25, 0.2), ks=(0.3, 0.3, 0.3), ns=60.0)
     m.material("bright_wall", (0.75, 0.72, 0.65))
     m.material("door", (0.55, 0.4, 0.3))
     m.material("table", (0.15, 0.15, 0.2), ks=(0.6, 0.6, 0.6), ns=400.0)
@@ -791,7 +802,85 @@ def door():
     m.write(folder)
     write_toml(folder, name, (0.5, 1.5, 4.8), (2.6, 0.9, 0.0), 65.0,
                (0.0, 0.0, 0.0), 256, 192, 64, 10)
-    print("door: slit %.3f m wide" % slit)
+    print("%s: slit %.3f m wide" % (name, slit))
+    return m
+
+
+# ================================================================ 7. gap
+def gap():
+    """Path guiding's showcase: a dark receiving room A (z > 0; walls of
+    albedo 0.2, a glossy dark floor) lit only through a vertical gap 12 cm
+    wide in the wall it shares with a bright diffuse room B (z < 0, albedo
+    0.8).  B's lamp hangs on the shared wall's B side, above and beside the
+    gap, and faces away from it, into B: no point of A can see its emitting
+    side, so next-event estimation from A finds nothing, and all of A's light
+    arrives through the gap after at least one bounce in B, from a few
+    hundredths of a steradian that BSDF sampling rarely finds."""
+    name = "gap"
+    m = Mesh(name)
+    m.material("dark_wall", (0.2, 0.2, 0.19))
+    m.material("dark_floor", (0.12, 0.1, 0.08), ks=(0.15, 0.15, 0.15), ns=80.0)
+    m.material("bright", (0.8, 0.78, 0.72))
+    m.material("box", (0.3, 0.12, 0.08))
+    m.material("lamp", (0.0, 0.0, 0.0), ke=(4000.0, 3600.0, 3000.0))
+    W, H, DA, DB = 4.0, 2.6, 5.0, 3.0
+    g0, g1, gh = 2.0, 2.12, 2.1  # the gap: x from g0 to g1, floor to gh
+    a_center = (W / 2, H / 2, DA / 2)
+    b_center = (W / 2, H / 2, -DB / 2)
+
+    def room(prefix, z0, z1, center, floor_mat, wall_mat):
+        m.group(prefix + "_floor", floor_mat)
+        m.face([(0, 0, z0), (W, 0, z0), (W, 0, z1), (0, 0, z1)],
+               toward=center)
+        m.group(prefix + "_walls", wall_mat)
+        m.face([(0, H, z0), (W, H, z0), (W, H, z1), (0, H, z1)],
+               toward=center)
+        m.face([(0, 0, z0), (0, 0, z1), (0, H, z1), (0, H, z0)],
+               toward=center)
+        m.face([(W, 0, z0), (W, 0, z1), (W, H, z1), (W, H, z0)],
+               toward=center)
+        zf = z1 if abs(z1) > abs(z0) else z0  # the far wall
+        m.face([(0, 0, zf), (W, 0, zf), (W, H, zf), (0, H, zf)],
+               toward=center)
+
+    room("a", 0.0, DA, a_center, "dark_floor", "dark_wall")
+    room("b", -DB, 0.0, b_center, "bright", "bright")
+    # the shared wall at z = 0 with the gap; each side faces its room
+    for prefix, center, mat in (("a", a_center, "dark_wall"),
+                                ("b", b_center, "bright")):
+        m.group(prefix + "_shared", mat)
+        m.face([(0, 0, 0), (g0, 0, 0), (g0, H, 0), (0, H, 0)], toward=center)
+        m.face([(g1, 0, 0), (W, 0, 0), (W, H, 0), (g1, H, 0)], toward=center)
+        m.face([(g0, gh, 0), (g1, gh, 0), (g1, H, 0), (g0, H, 0)],
+               toward=center)
+    # a box in room A, for shadows
+    m.group("box", "box")
+    bc = (1.0, 0.3, 2.0)
+    lo, hi = (0.7, 0.0, 1.7), (1.3, 0.6, 2.3)
+    for axis in range(3):
+        for side in (0, 1):
+            if axis == 1 and side == 0:
+                continue  # the bottom lies on the floor
+            v = (lo, hi)[side][axis]
+            others = [i for i in range(3) if i != axis]
+            pts = []
+            for a, b in ((0, 0), (1, 0), (1, 1), (0, 1)):
+                pt = [0.0, 0.0, 0.0]
+                pt[axis] = v
+                pt[others[0]] = (lo, hi)[a][others[0]]
+                pt[others[1]] = (lo, hi)[b][others[1]]
+                pts.append(tuple(pt))
+            m.face(pts, away_from=bc)
+    # B's lamp: 0.8 x 0.4 m on the shared wall's B side, 5 cm off it, facing
+    # -z (into B, away from A), left of the gap and above it
+    m.group("lamp", "lamp")
+    zl = -0.05
+    m.face([(0.6, 2.1, zl), (1.4, 2.1, zl), (1.4, 2.5, zl), (0.6, 2.5, zl)],
+           direction=(0, 0, -1))
+    folder = os.path.join(SCENES, name)
+    m.write(folder)
+    write_toml(folder, name, (0.4, 1.4, 4.8), (2.4, 0.8, 0.0), 65.0,
+               (0.0, 0.0, 0.0), 256, 192, 64, 10)
     return m
 
 
@@ -1027,6 +1116,13 @@ Generated by `tools/make_scenes.py` (committed output; regenerate with
   from a brightly lit second room; next-event estimation almost never reaches
   the light and BSDF sampling rarely finds the slit. The path-guiding scene
   (`--directions guided`).
+- `door-dark/`: the door with room A darkened (walls 0.25, floor Kd 0.15 /
+  Ks 0.1): the light through the slit is then most of room A's light, not a
+  share hidden under broad multi-bounce light that cosine sampling handles.
+- `gap/`: path guiding's showcase: a dark room (albedo 0.2, a glossy dark
+  floor) lit only through a 12 cm gap in the wall it shares with a bright
+  diffuse room whose lamp faces away from the gap: next-event estimation
+  finds nothing and BSDF sampling rarely finds the gap.
 - `sun-sky/`: blocks, a tower and a fence on a grey ground under an HDR sky
   (`sky.exr`, 256x128 lat-long): a smooth sky and a 1.5-degree sun that
   carries most of the light. Environment-map importance sampling
@@ -1047,6 +1143,8 @@ def main():
               ("lit-checker", lit_checker()),
               ("night-hall", night_hall()),
               ("door", door()),
+              ("door-dark", door("door-dark", dark=True)),
+              ("gap", gap()),
               ("sun-sky", sun_sky()),
               ("textured", textured())]
     with open(os.path.join(SCENES, "README.md"), "w") as fh:

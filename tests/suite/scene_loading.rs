@@ -224,3 +224,49 @@ fn shipped_scenes_load() {
         assert!(cb.shading[prim as usize].ng.y < -0.99);
     }
 }
+
+/// The guiding scenes are what the scene list says: in `gap` the lamp faces away from room A
+/// (every point with z ≥ 0 lies behind its plane), so with direct light only (max depth 2) the
+/// pixels of room A are black — only those that look through the gap into the lit room see
+/// anything — while with bounces every pixel of room A receives light; `door-dark` is the door
+/// with room A darker (a lower mean at the same spp and seed).
+#[test]
+fn the_guiding_scenes_are_lit_as_documented() {
+    use vrpt::render::RenderSettings;
+    let gap = common::shipped("gap");
+    assert_eq!(gap.lights.emitters.len(), 1);
+    let lamp = &gap.lights.emitters[0];
+    assert!(lamp.n.z < -0.99, "the lamp faces -z, into room B");
+    for prim in lamp.prims {
+        for v in gap.accel.vertices(prim) {
+            assert!(v.z < -0.01, "the lamp lies in room B: {v}");
+        }
+    }
+    let lit = |scene: &vrpt::scene::Scene, max_depth: u32, spp: u32| {
+        let settings = RenderSettings {
+            width: 48,
+            height: 32,
+            spp,
+            max_depth,
+            ..Default::default()
+        };
+        let (film, _) = common::render_quiet(scene, &settings);
+        let img = film.mean_image();
+        let nonzero = img.iter().filter(|c| c.max_element() > 0.0).count();
+        let mean = img.iter().map(|c| c.x as f64).sum::<f64>() / img.len() as f64;
+        (nonzero as f64 / img.len() as f64, mean)
+    };
+    // a zero is exact (no light sample or path found anything), so the lit pixels at depth 2
+    // are those that see the lit room through the gap: about 2 of 48 columns
+    let (direct, _) = lit(&gap, 2, 16);
+    assert!(direct < 0.1, "{:.1}% lit directly", direct * 100.0);
+    // with bounces, about 1 path in 200 of room A finds light (7.7% of the pixels lit at 16
+    // spp): at 1024 spp a pixel stays black with probability (1 − 1/200)^1024 ≈ 0.6%, so
+    // nearly all are lit (measured 96.7%: 51 of 1536 black, mostly in the box's shadow; the
+    // bound allows 153, 14 sd of a Poisson count of mean 51 away)
+    let (bounced, _) = lit(&gap, 10, 1024);
+    assert!(bounced > 0.9, "{:.1}% lit with bounces", bounced * 100.0);
+    let (_, door) = lit(&common::shipped("door"), 10, 64);
+    let (_, dark) = lit(&common::shipped("door-dark"), 10, 64);
+    assert!(dark < 0.8 * door, "door-dark {dark} against door {door}");
+}
