@@ -43,6 +43,9 @@ pub struct DTree {
     nodes: Vec<QNode>,
     /// The root's energy once built (0 before, or when nothing was recorded).
     total: f32,
+    /// The mean of its records' values: an estimate of `∫ L_i dω` over the sphere, so that
+    /// `radiance · pdf(ω)` estimates the radiance arriving from `ω`.
+    radiance: f32,
 }
 
 impl Default for DTree {
@@ -50,6 +53,7 @@ impl Default for DTree {
         DTree {
             nodes: vec![QNode::default()],
             total: 0.0,
+            radiance: 0.0,
         }
     }
 }
@@ -65,6 +69,7 @@ impl DTree {
                 .map(|&(sum, child)| QNode { sum, child })
                 .collect(),
             total: 0.0,
+            radiance: 0.0,
         };
         t.build();
         t
@@ -73,6 +78,17 @@ impl DTree {
     /// The energy recorded in all (a positive total means the tree can be sampled).
     pub fn total(&self) -> f32 {
         self.total
+    }
+
+    /// `∫ L_i dω` over the sphere, as learned (0 before).
+    #[inline]
+    pub fn radiance(&self) -> f32 {
+        self.radiance
+    }
+
+    /// Set it from the number of records the tree was built from.
+    pub(super) fn set_records(&mut self, n: u64) {
+        self.radiance = if n > 0 { self.total / n as f32 } else { 0.0 };
     }
 
     /// Number of quadtree nodes.
@@ -133,10 +149,18 @@ impl DTree {
     /// A canonical point drawn with density [`DTree::pdf_canonical`] from `u ∈ [0,1)²`, by
     /// hierarchical warping (`u` itself when the tree holds no energy).
     #[inline]
-    pub fn sample_canonical(&self, mut u: Vec2) -> Vec2 {
+    pub fn sample_canonical(&self, u: Vec2) -> Vec2 {
+        self.sample_canonical_pdf(u).0
+    }
+
+    /// [`DTree::sample_canonical`] and the density there ([`DTree::pdf_canonical`] of the
+    /// leaf it chose), from the one descent.
+    #[inline]
+    pub fn sample_canonical_pdf(&self, mut u: Vec2) -> (Vec2, f32) {
         if self.total <= 0.0 {
-            return u;
+            return (u, 1.0);
         }
+        let mut pdf = 1.0f32;
         let (mut origin, mut size) = (Vec2::ZERO, 1.0f32);
         let mut n = 0usize;
         loop {
@@ -164,9 +188,10 @@ impl DTree {
             size *= 0.5;
             origin += Vec2::new(ix as f32, iy as f32) * size;
             let i = ix | iy << 1;
+            pdf *= 4.0 * s[i] / total;
             let c = self.nodes[n].child[i];
             if c == 0 {
-                return (origin + u * size).min(Vec2::splat(ONE_MINUS_EPSILON));
+                return ((origin + u * size).min(Vec2::splat(ONE_MINUS_EPSILON)), pdf);
             }
             n = c as usize;
         }
@@ -180,6 +205,7 @@ impl DTree {
 
     /// Add `value` to the leaf quadrant holding canonical point `p`.
     #[inline]
+    #[cfg(test)]
     pub(super) fn record(&mut self, mut p: Vec2, value: f32) {
         let mut n = 0usize;
         loop {
@@ -191,6 +217,43 @@ impl DTree {
             }
             n = c as usize;
             p = q;
+        }
+    }
+
+    /// Add `value` spread by a box filter over directions (Müller et al.'s code): over the
+    /// square of the leaf's own size centred on `p` (clipped to `[0,1)²`), each leaf quadrant it
+    /// overlaps getting `value × overlap / box area`, so neighbouring quadrants learn alike and a
+    /// direction next to a recorded one is not left at zero.
+    pub(super) fn record_box(&mut self, p: Vec2, value: f32) {
+        // the depth of the leaf at p
+        let (mut n, mut q, mut size) = (0usize, p, 1.0f32);
+        loop {
+            let (i, r) = QNode::quadrant(q);
+            size *= 0.5;
+            match self.nodes[n].child[i] {
+                0 => break,
+                c => (n, q) = (c as usize, r),
+            }
+        }
+        let lo = p - Vec2::splat(0.5 * size);
+        let density = value / (size * size);
+        self.splat(0, Vec2::ZERO, 1.0, (lo, lo + Vec2::splat(size)), density);
+    }
+
+    /// Add `density ×` the overlap of box `(lo, hi)` with each leaf quadrant below node `n`
+    /// (which spans `origin .. origin + size`).
+    fn splat(&mut self, n: usize, origin: Vec2, size: f32, (lo, hi): (Vec2, Vec2), density: f32) {
+        let half = 0.5 * size;
+        for i in 0..4 {
+            let o = origin + Vec2::new((i & 1) as f32, (i >> 1) as f32) * half;
+            let w = (hi.min(o + Vec2::splat(half)) - lo.max(o)).max(Vec2::ZERO);
+            let area = w.x * w.y;
+            if area > 0.0 {
+                match self.nodes[n].child[i] {
+                    0 => self.nodes[n].sum[i] += density * area,
+                    c => self.splat(c as usize, o, half, (lo, hi), density),
+                }
+            }
         }
     }
 
@@ -266,5 +329,88 @@ mod tests {
         assert!(r.node_count() > 4, "{}", r.node_count());
         assert!(r.depth() >= 4);
         assert_eq!(r.total(), 0.0);
+    }
+
+    /// A tree refined where energy was recorded (several levels deep in one corner).
+    fn learned() -> DTree {
+        let mut t = DTree::default();
+        for k in 0..2000 {
+            let p = Vec2::new(
+                0.1 + 0.0001 * (k % 97) as f32,
+                0.8 + 0.0001 * (k % 13) as f32,
+            );
+            t.record(p, 1.0);
+        }
+        t.record(Vec2::new(0.9, 0.1), 5.0);
+        t.build();
+        let mut r = t.refined(ENERGY_FRACTION);
+        for k in 0..5000u32 {
+            let p = Vec2::new(
+                (k as f32 * 0.618_034).fract() * 0.3,
+                0.6 + (k as f32 * 0.414_213_6).fract() * 0.3,
+            );
+            r.record(p, 1.0 + (k % 7) as f32);
+        }
+        r.record(Vec2::new(0.7, 0.2), 100.0);
+        r.build();
+        r
+    }
+
+    /// The directional box filter keeps a record's energy whole when its box lies inside the
+    /// square (the overlaps of a box with the leaves it covers sum to its area), and spreads
+    /// it over more than one leaf where the box straddles leaves.
+    #[test]
+    fn the_box_filter_keeps_the_energy() {
+        let mut t = learned().refined(ENERGY_FRACTION);
+        assert!(t.depth() > 3);
+        let mut spread = 0;
+        for (k, p) in [
+            (0.11f32, 0.81f32),
+            (0.2, 0.7),
+            (0.5, 0.5),
+            (0.26, 0.74),
+            (0.7, 0.3),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let before: Vec<[f32; 4]> = t.nodes.iter().map(|n| n.sum).collect();
+            t.record_box(Vec2::new(p.0, p.1), 1.0);
+            let (mut added, mut cells) = (0.0f64, 0);
+            for (n, b) in t.nodes.iter().zip(&before) {
+                for (now, was) in n.sum.iter().zip(b) {
+                    let d = (now - was) as f64;
+                    if d != 0.0 {
+                        added += d;
+                        cells += 1;
+                    }
+                }
+            }
+            assert!(
+                (added - 1.0).abs() < 1e-5,
+                "box {k} at {p:?}: added {added}"
+            );
+            spread += (cells > 1) as u32;
+        }
+        assert!(spread >= 2, "boxes straddling leaves: {spread}");
+    }
+
+    /// The density a sample's descent returns is the density the tree gives its point.
+    #[test]
+    fn a_sample_carries_its_own_pdf() {
+        let t = learned();
+        assert!(t.total() > 0.0 && t.depth() > 3);
+        for i in 0..4096u32 {
+            let u = Vec2::new(
+                (i as f32 * 0.754_877_7 + 0.1).fract(),
+                (i as f32 * 0.569_840_3 + 0.3).fract(),
+            );
+            let (c, pdf) = t.sample_canonical_pdf(u);
+            let want = t.pdf_canonical(c);
+            assert!(
+                (pdf - want).abs() <= 1e-4 * want,
+                "u {u}: point {c}, pdf {pdf}, tree says {want}"
+            );
+        }
     }
 }

@@ -2,7 +2,7 @@
 //! samples and the one being recorded, the records' arrival and the splits between iterations.
 
 use super::fraction::FractionLearner;
-use super::{DTree, Record, ENERGY_FRACTION, GUIDE_FRACTION, SPATIAL_THRESHOLD};
+use super::{DTree, Record, ENERGY_FRACTION, GUIDE_FRACTION, REFERENCE_PATHS, SPATIAL_THRESHOLD};
 use crate::sampling::ONE_MINUS_EPSILON;
 use glam::Vec3;
 use rayon::prelude::*;
@@ -39,6 +39,8 @@ pub struct SdTree {
     size: f32,
     nodes: Vec<SNode>,
     pub(super) leaves: Vec<Leaf>,
+    /// The image's mean luminance as the last training iteration estimated it.
+    image_mean: f32,
 }
 
 /// How big a tree is.
@@ -75,6 +77,7 @@ impl SdTree {
                 alpha: GUIDE_FRACTION,
                 fraction: FractionLearner::default(),
             }],
+            image_mean: 1.0,
         }
     }
 
@@ -82,14 +85,22 @@ impl SdTree {
     /// leaf).
     #[inline]
     pub fn leaf_at(&self, p: Vec3) -> u32 {
+        self.leaf_and_extent(p).0
+    }
+
+    /// The index of the leaf holding point `p`, and the leaf box's edges (world units).
+    #[inline]
+    pub fn leaf_and_extent(&self, p: Vec3) -> (u32, Vec3) {
         let mut q = ((p - self.min) / self.size).clamp(Vec3::ZERO, Vec3::splat(ONE_MINUS_EPSILON));
+        let mut extent = Vec3::splat(self.size);
         let mut n = 0usize;
         loop {
             let node = self.nodes[n];
             if node.child == 0 {
-                return node.leaf;
+                return (node.leaf, extent);
             }
             let a = node.axis as usize;
+            extent[a] *= 0.5;
             if q[a] < 0.5 {
                 q[a] *= 2.0;
                 n = node.child as usize;
@@ -97,6 +108,29 @@ impl SdTree {
                 q[a] = (q[a] - 0.5) * 2.0;
                 n = node.child as usize + 1;
             }
+        }
+    }
+
+    /// The leaf a record made at `p` goes to, by the stochastic box filter of Müller et al.'s
+    /// code: `p` moved by `(u − ½) ⊙ extent`, the extent of `p`'s own leaf, so a record
+    /// teaches the leaves within one leaf size of where it was made, each in proportion to
+    /// the overlap (on average), and neighbouring leaves learn alike.
+    #[inline]
+    pub fn splat_leaf(&self, p: Vec3, u: Vec3) -> u32 {
+        let extent = self.leaf_and_extent(p).1;
+        self.leaf_at(p + (u - Vec3::splat(0.5)) * extent)
+    }
+
+    /// The image's mean luminance as training estimated it (1 before).
+    #[inline]
+    pub fn image_mean(&self) -> f32 {
+        self.image_mean
+    }
+
+    /// Set it.
+    pub fn set_image_mean(&mut self, m: f32) {
+        if m.is_finite() && m > 0.0 {
+            self.image_mean = m;
         }
     }
 
@@ -119,23 +153,29 @@ impl SdTree {
                 let i = i as u32;
                 let lo = records.partition_point(|r| r.leaf < i);
                 let hi = records.partition_point(|r| r.leaf <= i);
+                // α is learned only where a distribution sampled (Müller's code: once the
+                // tree is built); before, the guide's pdf is the uniform stand-in
+                let learn = leaf.sampling.total() > 0.0;
                 for r in &records[lo..hi] {
-                    leaf.building.record(r.point, r.value);
-                    leaf.fraction.learn(r);
+                    leaf.building.record_box(r.point, r.value);
+                    if learn {
+                        leaf.fraction.learn(r);
+                    }
                 }
                 leaf.samples += (hi - lo) as u64;
             });
     }
 
-    /// End training iteration `k` (0-based, of `2^k` spp): what it recorded becomes the sampling
+    /// End a training iteration of `paths` path samples: what it recorded becomes the sampling
     /// distribution, the S-tree is refined by the counts and the D-trees rebuilt empty by the
     /// energies (see the module doc).
-    pub fn finish_iteration(&mut self, k: u32) {
+    pub fn finish_iteration(&mut self, paths: u64) {
         self.leaves.par_iter_mut().for_each(|leaf| {
             leaf.building.build();
+            leaf.building.set_records(leaf.samples);
             leaf.sampling = leaf.building.clone();
         });
-        let threshold = SPATIAL_THRESHOLD * 2f64.powf(k as f64 * 0.5);
+        let threshold = SPATIAL_THRESHOLD * (paths as f64 / REFERENCE_PATHS).sqrt();
         // split leaves breadth-first by index order (deterministic); a split leaf's halves each
         // take half its count and a copy of its distribution
         let mut n = 0;
@@ -218,7 +258,7 @@ mod spatial {
                 });
             }
             t.add_records(recs);
-            t.finish_iteration(k);
+            t.finish_iteration(20000 << k);
         }
         assert!(t.size().leaves > 1);
         for p in [Vec3::new(1.5, 0.0, 8.0), Vec3::new(8.0, 0.0, 1.0)] {

@@ -596,7 +596,7 @@ impl<F: SamplerFactory> Job<'_, F> {
             seed: replicate_seed(self.settings.seed, rep),
             ..self.settings.clone()
         };
-        let (s, cut, _) = render_with(
+        let (s, cut, _, _) = render_with(
             self.scene,
             self.camera,
             &settings,
@@ -915,7 +915,7 @@ fn render_with<F: SamplerFactory>(
     guide: Guide,
     mut film: Option<&mut Film>,
     progress: &dyn Progress,
-) -> (RenderStats, bool, Vec<Record>) {
+) -> (RenderStats, bool, Vec<Record>, DVec3) {
     let start = Instant::now();
     // training renders keep no film: their samples only teach the guide
     let sums = film.as_deref();
@@ -1004,8 +1004,13 @@ fn render_with<F: SamplerFactory>(
     let mut stats = RenderStats::default();
     let mut cut = false;
     let mut records = Vec::with_capacity(tiles.iter().map(|t| t.records.len()).sum());
+    // what the samples added (the pixels' sums less what the film held before)
+    let mut total = DVec3::ZERO;
     for mut tile in tiles {
         records.append(&mut tile.records);
+        if film.is_none() {
+            total += tile.sums.iter().map(|s| s.0).sum::<DVec3>();
+        }
         // the pixels a tile rendered, in its order (all of them unless it was cut short)
         let w = tile.size.x as usize;
         if let Some(film) = film.as_deref_mut() {
@@ -1024,5 +1029,5 @@ fn render_with<F: SamplerFactory>(
         stats.thread_time += tile.time;
     }
     stats.elapsed = start.elapsed();
-    (stats, cut, records)
+    (stats, cut, records, total)
 }

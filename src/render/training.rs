@@ -47,9 +47,10 @@ pub(super) fn train_guide<F: SamplerFactory>(
             size: spp as u32,
         };
         let mut stopped = false;
+        let (mut sum, mut n_samples) = (glam::DVec3::ZERO, 0u64);
         for (tile_range, samples) in training_chunks(tiles, spp) {
             let pieces = sample_pieces(&tile_range, samples);
-            let results: Vec<(RenderStats, bool, Vec<Record>)> = pieces
+            let results: Vec<(RenderStats, bool, Vec<Record>, glam::DVec3)> = pieces
                 .into_par_iter()
                 .map(|range| {
                     render_with(
@@ -73,7 +74,9 @@ pub(super) fn train_guide<F: SamplerFactory>(
             }
             // piece by piece, in order: a leaf sees the records in the same order as from
             // their concatenation, without a copy of them all
-            for (s, _, records) in results {
+            for (s, _, records, total) in results {
+                sum += total;
+                n_samples += s.samples;
                 stats.rays.add(&s.rays);
                 stats.thread_time += s.thread_time;
                 tree.add_records(records);
@@ -82,7 +85,10 @@ pub(super) fn train_guide<F: SamplerFactory>(
         if stopped {
             break;
         }
-        tree.finish_iteration(k);
+        tree.finish_iteration(spp * settings.width as u64 * settings.height as u64);
+        if n_samples > 0 {
+            tree.set_image_mean(crate::math::luminance((sum / n_samples as f64).as_vec3()));
+        }
         g.iterations += 1;
         g.training_spp += spp;
         last = began.elapsed();
