@@ -101,5 +101,38 @@ fn defaults(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, scenes, defaults);
+/// Path guiding on the gap scene at 64×48, 64 spp (mis, stratified): Phong directions against
+/// guided ones, the guided render's training (31 spp) included, as a user pays for it.
+fn guided(c: &mut Criterion) {
+    let scene = vrpt::scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/gap"))
+        .expect("shipped scene");
+    let (w, h, spp) = (64, 48, 64);
+    let mut g = c.benchmark_group("render_guided");
+    g.sample_size(10)
+        .warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(5))
+        .throughput(Throughput::Elements((w * h * spp) as u64));
+    for directions in [
+        vrpt::bsdf::Directions::Phong,
+        vrpt::bsdf::Directions::Guided,
+    ] {
+        let s = RenderSettings {
+            width: w,
+            height: h,
+            spp,
+            max_depth: 10,
+            strategy: Strategy {
+                directions,
+                ..Strategy::default()
+            },
+            ..Default::default()
+        };
+        g.bench_with_input(BenchmarkId::from_parameter(directions), &s, |b, s| {
+            b.iter(|| black_box(render(&scene, s, &NoProgress).unwrap()))
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, scenes, defaults, guided);
 criterion_main!(benches);

@@ -227,12 +227,75 @@ fn environment(c: &mut Criterion) {
     g.finish();
 }
 
+/// Path guiding's lookups on a guide learned on the gap scene (64×48, 256 spp: 127 spp of
+/// training, a few hundred leaves), at receivers on the dark room's floor: the leaf of a point
+/// (the S-tree descent each vertex pays), a guided direction with its density (one quadtree
+/// descent), and the density of a given direction (an `atan2` and a descent: what a BSDF-sampled
+/// direction and NEE's MIS weight pay).
+fn guide(c: &mut Criterion) {
+    use glam::Vec3;
+    use vrpt::guiding::{dir_to_canonical, GuideAt};
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/gap");
+    let scene = vrpt::scene::load(std::path::Path::new(path)).expect("the shipped gap");
+    let settings = vrpt::render::RenderSettings {
+        width: 64,
+        height: 48,
+        spp: 256,
+        max_depth: 10,
+        strategy: vrpt::strategy::Strategy {
+            directions: vrpt::bsdf::Directions::Guided,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let (tree, _) = vrpt::render::learn_guide(&scene, &settings).expect("a guide");
+    let points: Vec<(Vec3, Vec2, Vec3)> = (0..SAMPLES)
+        .map(|i| {
+            let (a, b) = (
+                (i as f32 * 0.754_877_7).fract(),
+                (i as f32 * 0.569_840_3).fract(),
+            );
+            let d = Vec3::new(a - 0.5, b, 0.3 - a * b).normalize();
+            (Vec3::new(4.0 * a, 0.0, 5.0 * b), Vec2::new(b, a), d)
+        })
+        .collect();
+    let mut g = c.benchmark_group("guide");
+    g.warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(2))
+        .throughput(Throughput::Elements(SAMPLES as u64));
+    g.bench_function("leaf", |b| {
+        b.iter(|| points.iter().map(|&(p, _, _)| tree.leaf_at(p)).sum::<u32>())
+    });
+    let at: Vec<GuideAt> = points
+        .iter()
+        .map(|&(p, _, _)| GuideAt::new(&tree, p))
+        .collect();
+    g.bench_function("sample_with_pdf", |b| {
+        b.iter(|| {
+            at.iter()
+                .zip(&points)
+                .map(|(g, &(_, u, _))| g.dtree.sample_canonical_pdf(u).1)
+                .sum::<f32>()
+        })
+    });
+    g.bench_function("pdf_of_direction", |b| {
+        b.iter(|| {
+            at.iter()
+                .zip(&points)
+                .map(|(g, &(_, _, d))| g.guide_pdf_canonical(dir_to_canonical(d)))
+                .sum::<f32>()
+        })
+    });
+    g.finish();
+}
+
 criterion_group!(
     benches,
     samplers,
     samplers_in_pixels,
     warps,
     lights,
-    environment
+    environment,
+    guide
 );
 criterion_main!(benches);
