@@ -311,6 +311,53 @@ fn time_limited_render_stops_at_a_whole_pass() {
     assert!(m.render_seconds >= 0.3, "{}", m.render_seconds);
 }
 
+/// `--adaptive --time-limit`: rounds follow the clock, doubling while the time left allows, so
+/// their number grows as the logarithm of the samples, not in proportion (rounds of a fixed
+/// pass, as before, took `spp/R` of them: 1 spp per replicate each here). With first round 1
+/// spp per replicate and doubling, `r` rounds plan at least `2^(r−k) − 1` spp per replicate
+/// when the last `k` rounds were cut to the time left; a round cut to the time left is one of
+/// the last few (it ends about when the time does), so `r ≤ log2(spp/R) + 4` whatever the
+/// machine's speed.
+#[test]
+fn time_limited_adaptive_rounds_follow_the_clock() {
+    let dir = tempfile::tempdir().unwrap();
+    let exr = dir.path().join("t.exr");
+    let out = vrpt(&[
+        "render",
+        common::cornell_path().to_str().unwrap(),
+        "-o",
+        exr.to_str().unwrap(),
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--spp",
+        "100000000",
+        "--pass-spp",
+        "4",
+        "--adaptive",
+        "--time-limit",
+        "1",
+        "--quiet",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let img = vrpt::image_io::read_exr(&exr).unwrap();
+    let m = vrpt::output::RenderMetadata::from_attributes(&img.metadata).unwrap();
+    let rounds = m
+        .adaptive_rounds
+        .expect("an adaptive render says its rounds");
+    let per_replicate = m.spp as f64 / 4.0;
+    assert!(
+        (rounds as f64) <= per_replicate.log2() + 4.0,
+        "{rounds} rounds for {per_replicate} spp per replicate"
+    );
+    assert!(m.spp < 100_000_000, "spp {}", m.spp);
+}
+
 /// An EXR whose metadata claims another size than its pixels is refused by `merge` and `diff`
 /// with one line, never indexed by the claimed size.
 #[test]
