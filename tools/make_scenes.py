@@ -682,6 +682,41 @@ def night_hall():
     return m
 
 
+def box_room(m, W, H, prefix, z0, z1, center, floor_mat, wall_mat):
+    """A room of width W (x from 0) and height H between z0 and z1, its faces
+    toward `center`: floor, ceiling, the side walls and the far wall (the one
+    away from z = 0); the wall at z = 0 is left to the caller."""
+    m.group(prefix + "_floor", floor_mat)
+    m.face([(0, 0, z0), (W, 0, z0), (W, 0, z1), (0, 0, z1)], toward=center)
+    m.group(prefix + "_ceiling", wall_mat)
+    m.face([(0, H, z0), (W, H, z0), (W, H, z1), (0, H, z1)], toward=center)
+    m.group(prefix + "_walls", wall_mat)
+    m.face([(0, 0, z0), (0, 0, z1), (0, H, z1), (0, H, z0)], toward=center)
+    m.face([(W, 0, z0), (W, 0, z1), (W, H, z1), (W, H, z0)], toward=center)
+    zf = z1 if abs(z1) > abs(z0) else z0  # the far wall
+    m.face([(0, 0, zf), (W, 0, zf), (W, H, zf), (0, H, zf)], toward=center)
+
+
+def floor_box(m, lo, hi):
+    """An axis-aligned box standing on the floor: five faces (no bottom),
+    facing out."""
+    c = centroid([lo, hi])
+    for axis in range(3):
+        for side in (0, 1):
+            if axis == 1 and side == 0:
+                continue  # the bottom lies on the floor
+            v = (lo, hi)[side][axis]
+            others = [i for i in range(3) if i != axis]
+            pts = []
+            for a, b in ((0, 0), (1, 0), (1, 1), (0, 1)):
+                pt = [0.0, 0.0, 0.0]
+                pt[axis] = v
+                pt[others[0]] = (lo, hi)[a][others[0]]
+                pt[others[1]] = (lo, hi)[b][others[1]]
+                pts.append(tuple(pt))
+            m.face(pts, away_from=c)
+
+
 # ================================================================ 6. door
 def door(name="door", dark=False):
     """Veach's "door" setting: room A (the camera's, no light) and room B (a
@@ -713,24 +748,8 @@ def door(name="door", dark=False):
     a_center = (W / 2, H / 2, DA / 2)
     b_center = (W / 2, H / 2, -DB / 2)
 
-    def room(prefix, z0, z1, center, floor_mat, wall_mat):
-        m.group(prefix + "_floor", floor_mat)
-        m.face([(0, 0, z0), (W, 0, z0), (W, 0, z1), (0, 0, z1)],
-               toward=center)
-        m.group(prefix + "_ceiling", wall_mat)
-        m.face([(0, H, z0), (W, H, z0), (W, H, z1), (0, H, z1)],
-               toward=center)
-        m.group(prefix + "_walls", wall_mat)
-        m.face([(0, 0, z0), (0, 0, z1), (0, H, z1), (0, H, z0)],
-               toward=center)
-        m.face([(W, 0, z0), (W, 0, z1), (W, H, z1), (W, H, z0)],
-               toward=center)
-        zf = z1 if abs(z1) > abs(z0) else z0  # the far wall
-        m.face([(0, 0, zf), (W, 0, zf), (W, H, zf), (0, H, zf)],
-               toward=center)
-
-    room("a", 0.0, DA, a_center, "floor", "wall")
-    room("b", -DB, 0.0, b_center, "bright_wall", "bright_wall")
+    box_room(m, W, H, "a", 0.0, DA, a_center, "floor", "wall")
+    box_room(m, W, H, "b", -DB, 0.0, b_center, "bright_wall", "bright_wall")
     # the shared wall at z = 0, with the doorway; each side faces its room
     for prefix, center, mat in (("a", a_center, "wall"),
                                 ("b", b_center, "bright_wall")):
@@ -773,24 +792,7 @@ def door(name="door", dark=False):
     m.face([(0.7, ty, 1.9), (1.9, ty, 1.9), (1.9, ty, 2.9), (0.7, ty, 2.9)],
            direction=(0, 1, 0))
     m.group("box", "box")
-    bc = (3.1, 0.25, 1.6)
-    lo, hi = (2.85, 0.0, 1.35), (3.35, 0.5, 1.85)
-    for axis in range(3):
-        for side in (0, 1):
-            p = [lo[0], lo[1], lo[2]]
-            q = [hi[0], hi[1], hi[2]]
-            v = (lo, hi)[side][axis]
-            pts = []
-            others = [i for i in range(3) if i != axis]
-            for a, b in ((0, 0), (1, 0), (1, 1), (0, 1)):
-                pt = [0.0, 0.0, 0.0]
-                pt[axis] = v
-                pt[others[0]] = (lo, hi)[a][others[0]]
-                pt[others[1]] = (lo, hi)[b][others[1]]
-                pts.append(tuple(pt))
-            if axis == 1 and side == 0:
-                continue  # the bottom lies on the floor
-            m.face(pts, away_from=bc)
+    floor_box(m, (2.85, 0.0, 1.35), (3.35, 0.5, 1.85))
     _ = tc
     # room B's light: a 0.6 m square just below its ceiling, facing down
     m.group("light", "light")
@@ -828,23 +830,8 @@ def gap():
     a_center = (W / 2, H / 2, DA / 2)
     b_center = (W / 2, H / 2, -DB / 2)
 
-    def room(prefix, z0, z1, center, floor_mat, wall_mat):
-        m.group(prefix + "_floor", floor_mat)
-        m.face([(0, 0, z0), (W, 0, z0), (W, 0, z1), (0, 0, z1)],
-               toward=center)
-        m.group(prefix + "_walls", wall_mat)
-        m.face([(0, H, z0), (W, H, z0), (W, H, z1), (0, H, z1)],
-               toward=center)
-        m.face([(0, 0, z0), (0, 0, z1), (0, H, z1), (0, H, z0)],
-               toward=center)
-        m.face([(W, 0, z0), (W, 0, z1), (W, H, z1), (W, H, z0)],
-               toward=center)
-        zf = z1 if abs(z1) > abs(z0) else z0  # the far wall
-        m.face([(0, 0, zf), (W, 0, zf), (W, H, zf), (0, H, zf)],
-               toward=center)
-
-    room("a", 0.0, DA, a_center, "dark_floor", "dark_wall")
-    room("b", -DB, 0.0, b_center, "bright", "bright")
+    box_room(m, W, H, "a", 0.0, DA, a_center, "dark_floor", "dark_wall")
+    box_room(m, W, H, "b", -DB, 0.0, b_center, "bright", "bright")
     # the shared wall at z = 0 with the gap; each side faces its room
     for prefix, center, mat in (("a", a_center, "dark_wall"),
                                 ("b", b_center, "bright")):
@@ -855,22 +842,7 @@ def gap():
                toward=center)
     # a box in room A, for shadows
     m.group("box", "box")
-    bc = (1.0, 0.3, 2.0)
-    lo, hi = (0.7, 0.0, 1.7), (1.3, 0.6, 2.3)
-    for axis in range(3):
-        for side in (0, 1):
-            if axis == 1 and side == 0:
-                continue  # the bottom lies on the floor
-            v = (lo, hi)[side][axis]
-            others = [i for i in range(3) if i != axis]
-            pts = []
-            for a, b in ((0, 0), (1, 0), (1, 1), (0, 1)):
-                pt = [0.0, 0.0, 0.0]
-                pt[axis] = v
-                pt[others[0]] = (lo, hi)[a][others[0]]
-                pt[others[1]] = (lo, hi)[b][others[1]]
-                pts.append(tuple(pt))
-            m.face(pts, away_from=bc)
+    floor_box(m, (0.7, 0.0, 1.7), (1.3, 0.6, 2.3))
     # B's lamp: 0.8 x 0.4 m on the shared wall's B side, 5 cm off it, facing
     # -z (into B, away from A), left of the gap and above it
     m.group("lamp", "lamp")
