@@ -28,7 +28,7 @@
 //! to half the leaf's extent, [`SdTree::splat_leaf`]) and over directions by a box of the
 //! quadtree leaf's size at its point ([`DTree`]'s `record_box`), so neighbouring cells learn
 //! alike (on the door at 10 s without the directional box: 1.35× the MSE). Each record also
-//! feeds the leaf's learner of `α` (Adam on the KL divergence; see [`fraction`]). After the
+//! feeds the leaf's learner of `α` (Adam on the KL divergence; see `guiding/fraction.rs`). After the
 //! iteration each leaf's quadtree is summed up to its root and becomes the leaf's sampling
 //! distribution (with `∫ L_i dω` estimated as its records' mean, [`DTree::radiance`]); then an
 //! S-tree leaf that recorded more than `c·√(N_k/N_0)` samples ([`SPATIAL_THRESHOLD`]) is halved
