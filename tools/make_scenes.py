@@ -697,6 +697,18 @@ def box_room(m, W, H, prefix, z0, z1, center, floor_mat, wall_mat):
     m.face([(0, 0, zf), (W, 0, zf), (W, H, zf), (0, H, zf)], toward=center)
 
 
+def wall_with_opening(m, W, H, x0, x1, top, sides):
+    """The wall at z = 0 between two rooms, open from x0 to x1 up to `top`:
+    for each (group, center, material) of `sides`, its three faces toward
+    that room's center."""
+    for group, center, mat in sides:
+        m.group(group, mat)
+        m.face([(0, 0, 0), (x0, 0, 0), (x0, H, 0), (0, H, 0)], toward=center)
+        m.face([(x1, 0, 0), (W, 0, 0), (W, H, 0), (x1, H, 0)], toward=center)
+        m.face([(x0, top, 0), (x1, top, 0), (x1, H, 0), (x0, H, 0)],
+               toward=center)
+
+
 def floor_box(m, lo, hi):
     """An axis-aligned box standing on the floor: five faces (no bottom),
     facing out."""
@@ -751,13 +763,9 @@ def door(name="door", dark=False):
     box_room(m, W, H, "a", 0.0, DA, a_center, "floor", "wall")
     box_room(m, W, H, "b", -DB, 0.0, b_center, "bright_wall", "bright_wall")
     # the shared wall at z = 0, with the doorway; each side faces its room
-    for prefix, center, mat in (("a", a_center, "wall"),
-                                ("b", b_center, "bright_wall")):
-        m.group(prefix + "_door_wall", mat)
-        m.face([(0, 0, 0), (x0, 0, 0), (x0, H, 0), (0, H, 0)], toward=center)
-        m.face([(x1, 0, 0), (W, 0, 0), (W, H, 0), (x1, H, 0)], toward=center)
-        m.face([(x0, dh, 0), (x1, dh, 0), (x1, H, 0), (x0, H, 0)],
-               toward=center)
+    wall_with_opening(m, W, H, x0, x1, dh,
+                      (("a_door_wall", a_center, "wall"),
+                       ("b_door_wall", b_center, "bright_wall")))
     # the door: a 4 cm slab hinged at x1, turned into room B
     ang = math.radians(12.0)
     wdoor, t = x1 - x0, 0.04
@@ -833,13 +841,9 @@ def gap():
     box_room(m, W, H, "a", 0.0, DA, a_center, "dark_floor", "dark_wall")
     box_room(m, W, H, "b", -DB, 0.0, b_center, "bright", "bright")
     # the shared wall at z = 0 with the gap; each side faces its room
-    for prefix, center, mat in (("a", a_center, "dark_wall"),
-                                ("b", b_center, "bright")):
-        m.group(prefix + "_shared", mat)
-        m.face([(0, 0, 0), (g0, 0, 0), (g0, H, 0), (0, H, 0)], toward=center)
-        m.face([(g1, 0, 0), (W, 0, 0), (W, H, 0), (g1, H, 0)], toward=center)
-        m.face([(g0, gh, 0), (g1, gh, 0), (g1, H, 0), (g0, H, 0)],
-               toward=center)
+    wall_with_opening(m, W, H, g0, g1, gh,
+                      (("a_shared", a_center, "dark_wall"),
+                       ("b_shared", b_center, "bright")))
     # a box in room A, for shadows
     m.group("box", "box")
     floor_box(m, (0.7, 0.0, 1.7), (1.3, 0.6, 2.3))
