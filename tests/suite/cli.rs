@@ -272,18 +272,17 @@ fn help_explains_the_flags() {
     );
 }
 
-/// `--time-limit`: the render stops at the first whole pass after the limit, and the image
-/// records the spp it reached (a multiple of the pass size, far below the --spp cap) and the
-/// limit.
-#[test]
-fn time_limited_render_stops_at_a_whole_pass() {
+/// The metadata of a 16×16 render of the Cornell box asking for 10⁸ spp in passes of 4, with
+/// `extra` flags (a time limit among them: 10⁸ spp would take hours).
+fn time_limited_render(extra: &[&str]) -> vrpt::output::RenderMetadata {
     let dir = tempfile::tempdir().unwrap();
     let exr = dir.path().join("t.exr");
-    let out = vrpt(&[
+    let (cornell, out_path) = (common::cornell_path(), exr.to_str().unwrap().to_string());
+    let mut args = vec![
         "render",
-        common::cornell_path().to_str().unwrap(),
+        cornell.to_str().unwrap(),
         "-o",
-        exr.to_str().unwrap(),
+        &out_path,
         "--width",
         "16",
         "--height",
@@ -292,17 +291,25 @@ fn time_limited_render_stops_at_a_whole_pass() {
         "100000000",
         "--pass-spp",
         "4",
-        "--time-limit",
-        "0.3",
         "--quiet",
-    ]);
+    ];
+    args.extend_from_slice(extra);
+    let out = vrpt(&args);
     assert!(
         out.status.success(),
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
     let img = vrpt::image_io::read_exr(&exr).unwrap();
-    let m = vrpt::output::RenderMetadata::from_attributes(&img.metadata).unwrap();
+    vrpt::output::RenderMetadata::from_attributes(&img.metadata).unwrap()
+}
+
+/// `--time-limit`: the render stops at the first whole pass after the limit, and the image
+/// records the spp it reached (a multiple of the pass size, far below the --spp cap) and the
+/// limit.
+#[test]
+fn time_limited_render_stops_at_a_whole_pass() {
+    let m = time_limited_render(&["--time-limit", "0.3"]);
     assert!(m.spp >= 4 && m.spp.is_multiple_of(4), "spp {}", m.spp);
     // 10⁸ spp of 256 pixels would take hours: the limit stopped it
     assert!(m.spp < 100_000_000, "spp {}", m.spp);
@@ -320,33 +327,7 @@ fn time_limited_render_stops_at_a_whole_pass() {
 /// machine's speed.
 #[test]
 fn time_limited_adaptive_rounds_follow_the_clock() {
-    let dir = tempfile::tempdir().unwrap();
-    let exr = dir.path().join("t.exr");
-    let out = vrpt(&[
-        "render",
-        common::cornell_path().to_str().unwrap(),
-        "-o",
-        exr.to_str().unwrap(),
-        "--width",
-        "16",
-        "--height",
-        "16",
-        "--spp",
-        "100000000",
-        "--pass-spp",
-        "4",
-        "--adaptive",
-        "--time-limit",
-        "1",
-        "--quiet",
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let img = vrpt::image_io::read_exr(&exr).unwrap();
-    let m = vrpt::output::RenderMetadata::from_attributes(&img.metadata).unwrap();
+    let m = time_limited_render(&["--adaptive", "--time-limit", "1"]);
     let rounds = m
         .adaptive_rounds
         .expect("an adaptive render says its rounds");
@@ -560,34 +541,7 @@ fn guided_renders_report_their_training_and_guide_shows_it() {
 /// rather than at half of an absurd spp, and its recorded time includes the training.
 #[test]
 fn time_limited_guided_render_trains_inside_the_limit() {
-    let dir = tempfile::tempdir().unwrap();
-    let exr = dir.path().join("t.exr");
-    let out = vrpt(&[
-        "render",
-        common::cornell_path().to_str().unwrap(),
-        "-o",
-        exr.to_str().unwrap(),
-        "--width",
-        "16",
-        "--height",
-        "16",
-        "--spp",
-        "100000000",
-        "--pass-spp",
-        "4",
-        "--time-limit",
-        "0.5",
-        "--directions",
-        "guided",
-        "--quiet",
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let img = vrpt::image_io::read_exr(&exr).unwrap();
-    let m = vrpt::output::RenderMetadata::from_attributes(&img.metadata).unwrap();
+    let m = time_limited_render(&["--time-limit", "0.5", "--directions", "guided"]);
     let g = m.guide.expect("a guided render records its training");
     assert!(g.iterations >= 1);
     assert_eq!(g.training_spp, (1u64 << g.iterations) - 1);
