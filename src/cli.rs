@@ -12,7 +12,7 @@ use vrpt::commands::experiment::{CompareRequest, ConvergeRequest, Experiment, Ex
 use vrpt::commands::{diff, merge, render, Written};
 use vrpt::error::{Error, Result};
 use vrpt::lights::{LightChoice, LightPoints, LightStrategy};
-use vrpt::output::{parse_exposure, parse_seconds, parse_shard};
+use vrpt::limits::{parse_exposure, parse_seconds, parse_shard};
 use vrpt::render::Progress;
 use vrpt::sampler::SamplerKind;
 use vrpt::strategy::{Preset, Strategy};

@@ -1,5 +1,6 @@
 //! The limits of what vrpt accepts, in one place for every reader and flag: magnitudes of scene
-//! numbers, image sides, path lengths, and the memory an image needs. Depends on nothing of the
+//! numbers, image sides, path lengths, and the memory an image needs, and the parsers of flag
+//! values that hold them (seconds, exposure, shard, target). Depends on nothing of the
 //! renderer, so the scene readers, the image reader and the renderer all take them from here.
 
 use crate::error::{Error, Result};
@@ -122,4 +123,47 @@ pub fn check_texels(
         texels * TEXTURE_BYTES_PER_TEXEL,
     )
     .map_err(|e| e.to_string())
+}
+
+// The values of flags, parsed in one place (clap value parsers): each refuses what the limits
+// above refuse, with one line saying what it wanted.
+
+/// A flag's positive, finite number of seconds.
+pub fn parse_seconds(s: &str) -> std::result::Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(x) if x > 0.0 && x <= MAX_SECONDS => Ok(x),
+        _ => Err(format!(
+            "'{s}' is not a positive number of seconds up to {MAX_SECONDS:e}"
+        )),
+    }
+}
+
+/// An exposure in stops: a finite number within ±[`MAX_EXPOSURE`].
+pub fn parse_exposure(s: &str) -> std::result::Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(x) if x.abs() <= MAX_EXPOSURE => Ok(x),
+        _ => Err(format!(
+            "'{s}' is not an exposure in stops from -{MAX_EXPOSURE} to {MAX_EXPOSURE}"
+        )),
+    }
+}
+
+/// `I/N` with `I < N` (a shard, as `--shard` takes it and metadata records it).
+pub fn parse_shard(s: &str) -> std::result::Result<(u32, u32), String> {
+    let bad = || format!("'{s}' is not a shard I/N (0 ≤ I < N, e.g. 0/4)");
+    let (i, n) = s.split_once('/').ok_or_else(bad)?;
+    let i: u32 = i.trim().parse().map_err(|_| bad())?;
+    let n: u32 = n.trim().parse().map_err(|_| bad())?;
+    if i >= n {
+        return Err(bad());
+    }
+    Ok((i, n))
+}
+
+/// A target relMSE: a positive finite number.
+pub fn parse_target(s: &str) -> std::result::Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(x) if x > 0.0 && x.is_finite() => Ok(x),
+        _ => Err(format!("'{s}' is not a positive relMSE")),
+    }
 }

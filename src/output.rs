@@ -340,7 +340,10 @@ impl RenderMetadata {
             time_limit_seconds,
             merged_from: a.get("merged_from").cloned(),
             image: a.get("image").cloned(),
-            shard: a.get("shard").map(|v| parse_shard(v)).transpose()?,
+            shard: a
+                .get("shard")
+                .map(|v| crate::limits::parse_shard(v))
+                .transpose()?,
             requested_spp: opt(a, "requested_spp")?,
             interrupted: match a.get("interrupted").map(String::as_str) {
                 None | Some("false") => false,
@@ -450,40 +453,6 @@ impl RenderMetadata {
             message: "no vrpt metadata: not a vrpt render".into(),
         })
     }
-}
-
-/// A flag's positive, finite number of seconds.
-pub fn parse_seconds(s: &str) -> std::result::Result<f64, String> {
-    use crate::limits::MAX_SECONDS;
-    match s.parse::<f64>() {
-        Ok(x) if x > 0.0 && x <= MAX_SECONDS => Ok(x),
-        _ => Err(format!(
-            "'{s}' is not a positive number of seconds up to {MAX_SECONDS:e}"
-        )),
-    }
-}
-
-/// An exposure in stops: a finite number within ±[`crate::limits::MAX_EXPOSURE`].
-pub fn parse_exposure(s: &str) -> std::result::Result<f32, String> {
-    use crate::limits::MAX_EXPOSURE;
-    match s.parse::<f32>() {
-        Ok(x) if x.abs() <= MAX_EXPOSURE => Ok(x),
-        _ => Err(format!(
-            "'{s}' is not an exposure in stops from -{MAX_EXPOSURE} to {MAX_EXPOSURE}"
-        )),
-    }
-}
-
-/// `I/N` with `I < N` (a shard, as `--shard` takes it and metadata records it).
-pub fn parse_shard(s: &str) -> std::result::Result<(u32, u32), String> {
-    let bad = || format!("'{s}' is not a shard I/N (0 ≤ I < N, e.g. 0/4)");
-    let (i, n) = s.split_once('/').ok_or_else(bad)?;
-    let i: u32 = i.trim().parse().map_err(|_| bad())?;
-    let n: u32 = n.trim().parse().map_err(|_| bad())?;
-    if i >= n {
-        return Err(bad());
-    }
-    Ok((i, n))
 }
 
 /// The image a render's film makes, as an EXR holds it: the mean, the variance of the mean, the

@@ -67,19 +67,11 @@ pub struct ErrorArgs {
     pub adaptive: bool,
     /// Stop after the first round whose estimated relMSE of the image is at most E (or at
     /// --spp or --time-limit, whichever comes first; without --spp the cap is 65536 spp).
-    #[arg(long, value_name = "E", value_parser = parse_target)]
+    #[arg(long, value_name = "E", value_parser = crate::limits::parse_target)]
     pub target_error: Option<f64>,
     /// Also write the samples of each pixel as a false-colour PNG with its colour bar.
     #[arg(long, value_name = "PNG")]
     pub spp_map: Option<PathBuf>,
-}
-
-/// A target relMSE: a positive finite number.
-fn parse_target(s: &str) -> std::result::Result<f64, String> {
-    match s.parse::<f64>() {
-        Ok(x) if x > 0.0 && x.is_finite() => Ok(x),
-        _ => Err(format!("'{s}' is not a positive relMSE")),
-    }
 }
 
 /// The cap on spp of a `--target-error` render without `--spp`.

@@ -932,11 +932,11 @@ proptest::proptest! {
     fn float_flag_parsers_accept_only_their_ranges(bits in proptest::prelude::any::<u64>(), pick in 0..4usize) {
         let x = f64::from_bits(bits);
         let text = [x.to_string(), format!("{x:e}"), format!("{}", x as f32), format!("-{x}")][pick].clone();
-        if let Ok(t) = vrpt::output::parse_seconds(&text) {
+        if let Ok(t) = vrpt::limits::parse_seconds(&text) {
             proptest::prop_assert!(t > 0.0 && t <= vrpt::limits::MAX_SECONDS);
             proptest::prop_assert!(vrpt::limits::duration("--time-limit", t).is_ok());
         }
-        if let Ok(e) = vrpt::output::parse_exposure(&text) {
+        if let Ok(e) = vrpt::limits::parse_exposure(&text) {
             proptest::prop_assert!(e.abs() <= vrpt::limits::MAX_EXPOSURE);
         }
         // the library's own check of a time takes any float without a panic
