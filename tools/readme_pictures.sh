@@ -77,8 +77,12 @@ $vrpt render scenes/sun-sky --width 256 --height 192 --spp 16 --seed 1 -q --ligh
 $vrpt render scenes/textured --width 256 --height 192 --spp 256 --seed 1 -q -o "$out/textured.png"
 
 # The theory (README "The theory, by command"): 256 points of each sampler in the pixel's
-# dimensions, the strata and the independence box drawn, and their spectra over 16 sets.
-$vrpt points --n 256 -o "$out/points.png" >/dev/null
+# dimensions with the dependent pair, the strata and the independence box drawn, their
+# periodograms, spectra and discrepancy curves over 16 sets; the same points after the cosine
+# warp; every warp against its pdf; the variance of known integrals against N.
+$vrpt points --n 256 --dependent -o "$out/points.png" >/dev/null
+$vrpt points --n 256 --warp cosine -o "$out/points-cosine.png" >/dev/null
 $vrpt warptest -o "$out/warps.png" >/dev/null
+$vrpt integrate --n 16,64,256,1024 -o "$out/integrals.png" >/dev/null
 
 ls -l "$out"/*.png

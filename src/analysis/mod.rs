@@ -9,6 +9,7 @@
 //! - [`fit`]: least-squares lines and log-log slopes;
 //! - [`plots`]: log-log convergence plots (SVG/PNG) and labelled image grids (PNG);
 //! - [`points`]: a sampler's points in the unit square, their discrepancy and spectrum;
+//! - [`theory_plots`]: the pictures of `vrpt points` and `vrpt integrate`;
 //! - [`integrate`]: known-answer integrals by each sampler, against the variance formulas;
 //! - [`report`]: the self-contained HTML report of compare, converge and diff.
 
@@ -23,3 +24,4 @@ pub mod metrics;
 pub mod plots;
 pub mod points;
 pub mod report;
+pub mod theory_plots;

@@ -18,11 +18,24 @@
 //!   the low frequencies, where a smooth integrand's energy is, carry almost no error.
 //! - **Radially averaged power**: the mean of `P(k)` over the integer `k` with
 //!   `r − ½ ≤ |k| < r + ½`, for `r = 1, 2, …`.
+//! - **Discrepancy against N**: the root mean square of `D₂*` over realisations at
+//!   `N = 16, 32, …`, and the slope of `log D` against `log N` (independent points `−½`;
+//!   jittered ones `−¾`, from `E[D₂*²] = O(N^{-3/2})`; Sobol points near `−1`).
+//!
+//! A set can also be shown *after a warp* ([`PointWarp`]), the way a render uses it: onto the
+//! hemisphere (uniform, cosine-weighted, a Phong lobe), drawn by Lambert's equal-area
+//! projection `ρ = √(1 − cosθ)` at azimuth `φ` (equal areas of the hemisphere stay equal in
+//! the unit disk, so the density seen is the warp's pdf per solid angle), or onto a triangle
+//! by area. And the *dependent pair* `(x, x + ½ mod 1)` of a set's first coordinates: the
+//! lecture's counter-example, whose box fraction is far from `ab` ([`dependent_pair`]).
 
 use crate::render::{SamplePass, SamplerFactory};
 use crate::sampler::layout::{Dim, BOUNCE_DIMS, CAMERA_DIMS};
 use crate::sampler::Sampler;
-use glam::{UVec2, Vec2};
+use crate::sampling::{
+    sample_cosine_hemisphere, sample_phong_lobe, sample_uniform_hemisphere, sample_uniform_triangle,
+};
+use glam::{UVec2, Vec2, Vec3};
 
 /// The 2D dimensions of the layout a point set can be drawn from, by name: `pixel`, and for
 /// bounce `b` (from 1) `light-b` (the point on the light) and `direction-b`.
@@ -85,6 +98,124 @@ pub fn draw_points<F: SamplerFactory>(
             out
         })
         .collect()
+}
+
+/// The root mean square of [`l2_star_discrepancy`] over `sets`.
+pub fn rms_discrepancy(sets: &[Vec<Vec2>]) -> f64 {
+    let m = sets.len().max(1) as f64;
+    (sets
+        .iter()
+        .map(|s| l2_star_discrepancy(s).powi(2))
+        .sum::<f64>()
+        / m)
+        .sqrt()
+}
+
+/// The set sizes of the discrepancy curve: `16, 32, …, 2048`.
+pub const CURVE_SIZES: [u32; 8] = [16, 32, 64, 128, 256, 512, 1024, 2048];
+
+/// The dependent pair of `points`: `(xᵢ, xᵢ + ½ mod 1)`. Its two coordinates are each uniform,
+/// but jointly they lie on two segments, so the fraction in `[0,a)×[0,b)` is
+/// `|[0,a) ∩ [½, ½ + b)|` (0 for `a ≤ ½`), not `ab`.
+pub fn dependent_pair(points: &[Vec2]) -> Vec<Vec2> {
+    points
+        .iter()
+        .map(|p| Vec2::new(p.x, (p.x + 0.5).fract()))
+        .collect()
+}
+
+/// Where a point set is shown: the unit square as drawn, or after a warp a render applies.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PointWarp {
+    /// The unit square itself.
+    Square,
+    /// Uniform directions on the hemisphere (`sample_uniform_hemisphere`).
+    Uniform,
+    /// Cosine-weighted directions (`sample_cosine_hemisphere`).
+    Cosine,
+    /// A Phong lobe of this exponent about the pole (`sample_phong_lobe`).
+    Phong(f32),
+    /// Uniform by area on the triangle `(0,0), (1,0), (½, √3/2)` (`sample_uniform_triangle`).
+    Triangle,
+}
+
+impl std::str::FromStr for PointWarp {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        let bad =
+            || format!("'{s}' is not a warp: square, uniform, cosine, phong:E (E > 0) or triangle");
+        Ok(match s {
+            "square" => PointWarp::Square,
+            "uniform" => PointWarp::Uniform,
+            "cosine" => PointWarp::Cosine,
+            "triangle" => PointWarp::Triangle,
+            _ => {
+                let e: f32 = s
+                    .strip_prefix("phong:")
+                    .and_then(|e| e.parse().ok())
+                    .ok_or_else(bad)?;
+                if !(e > 0.0 && e <= 1e6) {
+                    return Err(bad());
+                }
+                PointWarp::Phong(e)
+            }
+        })
+    }
+}
+
+impl std::fmt::Display for PointWarp {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            PointWarp::Square => write!(f, "square"),
+            PointWarp::Uniform => write!(f, "uniform"),
+            PointWarp::Cosine => write!(f, "cosine"),
+            PointWarp::Phong(e) => write!(f, "phong:{e}"),
+            PointWarp::Triangle => write!(f, "triangle"),
+        }
+    }
+}
+
+impl PointWarp {
+    /// The direction of a hemisphere warp (`None` for the square and the triangle).
+    pub fn direction(self, u: Vec2) -> Option<Vec3> {
+        match self {
+            PointWarp::Uniform => Some(sample_uniform_hemisphere(u)),
+            PointWarp::Cosine => Some(sample_cosine_hemisphere(u)),
+            PointWarp::Phong(e) => Some(sample_phong_lobe(e, u)),
+            PointWarp::Square | PointWarp::Triangle => None,
+        }
+    }
+
+    /// Where `u` is drawn in the picture: itself on the square; the triangle's point; a
+    /// direction's equal-area projection `√(1 − cosθ) (cosφ, sinφ)` in the unit disk.
+    pub fn picture(self, u: Vec2) -> Vec2 {
+        match self {
+            PointWarp::Square => u,
+            PointWarp::Triangle => {
+                let b = sample_uniform_triangle(u);
+                // b0·(0,0) + b1·(1,0) + (1 − b0 − b1)·(½, √3/2)
+                let b2 = 1.0 - b.x - b.y;
+                Vec2::new(b.y + 0.5 * b2, 0.866_025_4 * b2)
+            }
+            _ => {
+                let d = self.direction(u).unwrap_or(Vec3::Z);
+                let s = (d.x * d.x + d.y * d.y).sqrt();
+                if s <= 0.0 {
+                    return Vec2::ZERO;
+                }
+                Vec2::new(d.x, d.y) * ((1.0 - d.z).max(0.0).sqrt() / s)
+            }
+        }
+    }
+
+    /// The picture's extent `(x range, y range)`.
+    pub fn extent(self) -> ((f32, f32), (f32, f32)) {
+        match self {
+            PointWarp::Square => ((0.0, 1.0), (0.0, 1.0)),
+            PointWarp::Triangle => ((0.0, 1.0), (0.0, 0.9)),
+            _ => ((-1.0, 1.0), (-1.0, 1.0)),
+        }
+    }
 }
 
 /// The L2-star discrepancy of `points` in `[0,1)²` (Warnock's closed form; O(N²)).
@@ -171,161 +302,6 @@ pub fn radial_spectrum(p: &[f64], m: u32) -> Vec<(f64, f64)> {
 pub fn fraction_in_box(points: &[Vec2], a: f32, b: f32) -> f64 {
     let inside = points.iter().filter(|p| p.x < a && p.y < b).count();
     inside as f64 / points.len().max(1) as f64
-}
-
-/// One sampler's panel of the picture of [`write_picture`].
-pub struct Panel<'a> {
-    /// The sampler's name.
-    pub label: &'a str,
-    /// Its points.
-    pub points: &'a [Vec2],
-    /// The strata grid `(a, b)` to draw (a stratified set), if any.
-    pub strata: Option<(u32, u32)>,
-    /// The box `[0,a)×[0,b)` drawn over the points.
-    pub box_size: (f32, f32),
-    /// The line under the panel.
-    pub caption: String,
-    /// Its radially averaged power spectrum, `[frequency, power]`.
-    pub spectrum: &'a [[f64; 2]],
-}
-
-/// Write the panels side by side (points, strata, box, caption) over one plot of their radial
-/// spectra, to `path`: SVG by its extension, else PNG.
-pub fn write_picture(path: &std::path::Path, panels: &[Panel]) -> crate::error::Result<()> {
-    use crate::analysis::plots::{draw_err, register_font};
-    use plotters::prelude::*;
-    register_font();
-    let size = ((360 * panels.len().max(1)) as u32, 760u32);
-    if path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("svg"))
-    {
-        let mut svg = String::new();
-        draw_picture(
-            SVGBackend::with_string(&mut svg, size).into_drawing_area(),
-            panels,
-        )
-        .map_err(|m| draw_err(path, m))?;
-        crate::image_io::write_bytes(path, svg.as_bytes())
-    } else {
-        let mut buf = vec![0u8; (size.0 * size.1 * 3) as usize];
-        draw_picture(
-            BitMapBackend::with_buffer(&mut buf, size).into_drawing_area(),
-            panels,
-        )
-        .map_err(|m| draw_err(path, m))?;
-        crate::image_io::write_png_rgb8(path, size.0, size.1, &buf)
-    }
-}
-
-fn draw_picture<DB: plotters::prelude::DrawingBackend>(
-    root: plotters::prelude::DrawingArea<DB, plotters::coord::Shift>,
-    panels: &[Panel],
-) -> std::result::Result<(), String> {
-    use crate::analysis::plots::{FONT, PALETTE};
-    use plotters::prelude::*;
-    let e = |x: plotters::drawing::DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
-    root.fill(&WHITE).map_err(e)?;
-    let (top, bottom) = root.split_vertically(400);
-    let cells = top.split_evenly((1, panels.len().max(1)));
-    for (k, (area, p)) in cells.iter().zip(panels).enumerate() {
-        let colour = PALETTE[k % PALETTE.len()];
-        let mut chart = ChartBuilder::on(area)
-            .caption(&p.caption, (FONT, 13))
-            .margin(12)
-            .x_label_area_size(20)
-            .y_label_area_size(30)
-            .build_cartesian_2d(0f32..1f32, 0f32..1f32)
-            .map_err(e)?;
-        chart
-            .configure_mesh()
-            .disable_mesh()
-            .label_style((FONT, 11))
-            .x_labels(3)
-            .y_labels(3)
-            .draw()
-            .map_err(e)?;
-        if let Some((a, b)) = p.strata {
-            let grey = RGBColor(200, 200, 200);
-            for i in 1..a {
-                let x = i as f32 / a as f32;
-                chart
-                    .draw_series(LineSeries::new([(x, 0.0), (x, 1.0)], grey))
-                    .map_err(e)?;
-            }
-            for j in 1..b {
-                let y = j as f32 / b as f32;
-                chart
-                    .draw_series(LineSeries::new([(0.0, y), (1.0, y)], grey))
-                    .map_err(e)?;
-            }
-        }
-        let (bx, by) = p.box_size;
-        chart
-            .draw_series([Rectangle::new(
-                [(0.0, 0.0), (bx, by)],
-                RED.mix(0.12).filled(),
-            )])
-            .map_err(e)?;
-        chart
-            .draw_series([Rectangle::new([(0.0, 0.0), (bx, by)], RED.stroke_width(1))])
-            .map_err(e)?;
-        chart
-            .draw_series(
-                p.points
-                    .iter()
-                    .map(|q| Circle::new((q.x, q.y), 2, colour.filled())),
-            )
-            .map_err(e)?;
-    }
-    let top_power = panels
-        .iter()
-        .flat_map(|p| p.spectrum.iter().map(|s| s[1]))
-        .fold(1.0f64, f64::max)
-        * 1.1;
-    let kmax = panels
-        .iter()
-        .flat_map(|p| p.spectrum.iter().map(|s| s[0]))
-        .fold(1.0f64, f64::max);
-    let mut chart = ChartBuilder::on(&bottom)
-        .caption(
-            "radially averaged power spectrum (independent points: 1)",
-            (FONT, 16),
-        )
-        .margin(15)
-        .x_label_area_size(40)
-        .y_label_area_size(50)
-        .build_cartesian_2d(0f64..kmax, 0f64..top_power)
-        .map_err(e)?;
-    chart
-        .configure_mesh()
-        .x_desc("frequency |k|")
-        .y_desc("power")
-        .label_style((FONT, 12))
-        .draw()
-        .map_err(e)?;
-    for (k, p) in panels.iter().enumerate() {
-        let colour = PALETTE[k % PALETTE.len()];
-        chart
-            .draw_series(LineSeries::new(
-                p.spectrum.iter().map(|s| (s[0], s[1])),
-                colour.stroke_width(2),
-            ))
-            .map_err(e)?
-            .label(p.label.to_string())
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2))
-            });
-    }
-    chart
-        .configure_series_labels()
-        .label_font((FONT, 13))
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .position(SeriesLabelPosition::LowerRight)
-        .draw()
-        .map_err(e)?;
-    root.present().map_err(e)
 }
 
 #[cfg(test)]
@@ -426,6 +402,115 @@ mod tests {
                 assert!((ratio - 1.0).abs() < 0.25, "N {n}: N·D²·36/5 = {ratio}");
             }
         }
+    }
+
+    /// The discrepancy curve's slopes over `N = 16 … 2048` ([`CURVE_SIZES`]), 16 sets each, for
+    /// three seeds. Independent: `−½` within ±0.1 (`E[D²] = 5/(36N)` exactly; one set's `D²`
+    /// has a relative spread below 1, so the rms over 16 sets has a log spread near
+    /// ½·1/√16 = 0.125, and the fitted slope over eight sizes spanning ln 128 (Σ(x − x̄)² = 9.9)
+    /// a standard error near 0.125/√9.9 = 0.04: ±0.1 is 2.5 of those, over three seeds. The
+    /// spread is an upper bound; measured slopes are −0.49 to −0.51). Stratified: below −0.65
+    /// (jittered theory −¾).
+    #[test]
+    fn discrepancy_falls_as_n_to_the_minus_half_for_independent_points_and_faster_stratified() {
+        use crate::analysis::fit::log_log_slope;
+        use crate::render::{independent, stratified};
+        let pixel = UVec2::new(2, 9);
+        for seed in [5u64, 500, 50_000] {
+            let slope = |strat: bool| {
+                let d: Vec<f64> = CURVE_SIZES
+                    .iter()
+                    .map(|&n| {
+                        let sets: Vec<Vec<Vec2>> = (0..16)
+                            .map(|r| {
+                                if strat {
+                                    draw_points(&stratified, seed + r, n, pixel, 0)
+                                } else {
+                                    draw_points(&independent, seed + r, n, pixel, 0)
+                                }
+                            })
+                            .collect();
+                        rms_discrepancy(&sets)
+                    })
+                    .collect();
+                let ns: Vec<f64> = CURVE_SIZES.iter().map(|&n| n as f64).collect();
+                log_log_slope(&ns, &d)
+            };
+            let (ind, strat) = (slope(false), slope(true));
+            assert!(
+                (ind + 0.5).abs() < 0.1,
+                "seed {seed}: independent slope {ind}"
+            );
+            assert!(strat < -0.65, "seed {seed}: stratified slope {strat}");
+        }
+    }
+
+    /// The dependent pair fails the box test for any set: in `[0,½)×[0,0.3)` it has no point (a
+    /// point with `x < ½` has second coordinate `x + ½ ≥ ½`), while the independent set's
+    /// fraction lies within 4 binomial standard deviations of `ab`; the pair's second
+    /// coordinate alone is still uniform (within 4 standard deviations).
+    #[test]
+    fn the_dependent_pair_fails_the_box_test() {
+        use crate::render::independent;
+        for seed in [1u64, 2, 3] {
+            let pts = draw_points(&independent, seed, 4096, UVec2::new(1, 1), 0);
+            let (a, b) = (0.5f32, 0.3f32);
+            let area = (a * b) as f64;
+            let sd = (area * (1.0 - area) / 4096.0).sqrt();
+            assert!((fraction_in_box(&pts, a, b) - area).abs() < 4.0 * sd);
+            assert_eq!(fraction_in_box(&dependent_pair(&pts), a, b), 0.0);
+            // each coordinate alone is still uniform
+            let dep = dependent_pair(&pts);
+            let below = dep.iter().filter(|p| p.y < b).count() as f64 / 4096.0;
+            let sd = (b as f64 * (1.0 - b as f64) / 4096.0).sqrt();
+            assert!((below - b as f64).abs() < 4.0 * sd, "{below}");
+        }
+    }
+
+    /// The pictures of the warps keep area: uniform hemisphere directions put a fraction `r²` of
+    /// the points within radius `r` of the disk's centre (`ρ² = 1 − cosθ`, and `cosθ` is
+    /// uniform), cosine ones `1 − (1 − r²)²` (`P(cosθ > c) = 1 − c²`), and points uniform on the
+    /// triangle put `¾` below half its height; all within 4 binomial standard deviations for
+    /// 8192 points, and every point inside its domain.
+    #[test]
+    fn the_warp_pictures_keep_area() {
+        use crate::render::independent;
+        let pts = draw_points(&independent, 11, 8192, UVec2::new(4, 4), 0);
+        let n = pts.len() as f64;
+        let check = |w: PointWarp, inside: &dyn Fn(Vec2) -> bool, want: f64| {
+            let got = pts.iter().filter(|&&u| inside(w.picture(u))).count() as f64 / n;
+            let sd = (want * (1.0 - want) / n).sqrt();
+            assert!((got - want).abs() < 4.0 * sd, "{w}: {got} vs {want}");
+        };
+        for r in [0.3f32, 0.6, 0.9] {
+            let r2 = (r * r) as f64;
+            check(PointWarp::Uniform, &|q| q.length() < r, r2);
+            check(
+                PointWarp::Cosine,
+                &|q| q.length() < r,
+                1.0 - (1.0 - r2).powi(2),
+            );
+        }
+        let h = 0.866_025_4f32;
+        check(PointWarp::Triangle, &|q| q.y < 0.5 * h, 0.75);
+        for w in [
+            PointWarp::Uniform,
+            PointWarp::Cosine,
+            PointWarp::Phong(30.0),
+        ] {
+            assert!(
+                pts.iter().all(|&u| w.picture(u).length() <= 1.0 + 1e-5),
+                "{w}"
+            );
+        }
+        assert!(pts.iter().all(|&u| {
+            let q = PointWarp::Triangle.picture(u);
+            q.y >= -1e-6 && q.y <= h * (1.0 - (2.0 * q.x - 1.0).abs()) + 1e-5
+        }));
+        assert_eq!("phong:20".parse::<PointWarp>(), Ok(PointWarp::Phong(20.0)));
+        assert!("phong:-1".parse::<PointWarp>().is_err());
+        assert!("sphere".parse::<PointWarp>().is_err());
+        assert_eq!(PointWarp::Phong(20.0).to_string(), "phong:20");
     }
 
     /// The layout's names: the pixel first, then each bounce's light point and direction.

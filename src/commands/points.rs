@@ -1,13 +1,18 @@
 //! `vrpt points`: the lecture's first pictures, made by the samplers vrpt renders with. N points
 //! of each sampler in one 2D dimension of the layout (the pixel position by default), side by
 //! side: the stratified sampler's strata drawn, the box `[0,a)×[0,b)` with the fraction of
-//! points inside beside its area `ab` (independence), the L2-star discrepancy, and below them
-//! the radially averaged power spectrum over M realisations ([`crate::analysis::points`] has
-//! the formulas). PNG or SVG by the extension of `-o`; `--json` writes the numbers.
+//! points inside beside its area `ab` (independence), the L2-star discrepancy; under them each
+//! set's periodogram over M realisations, its radially averaged power spectrum, and the
+//! discrepancy against N with its fitted slope ([`crate::analysis::points`] has the formulas,
+//! [`crate::analysis::theory_plots`] draws). `--warp` shows the points where a render puts them
+//! (on the hemisphere or a triangle); `--dependent` adds the pair `(x, x + ½ mod 1)` of the
+//! first sampler's points, which fails the box test. PNG or SVG by the extension of `-o`;
+//! `--json` writes the numbers.
 
+use crate::analysis::fit::log_log_slope;
 use crate::analysis::points::{
-    dimension_index, draw_points, fraction_in_box, l2_star_discrepancy, periodogram,
-    radial_spectrum,
+    dependent_pair, dimension_index, draw_points, fraction_in_box, periodogram, radial_spectrum,
+    rms_discrepancy, PointWarp, CURVE_SIZES,
 };
 use crate::error::{Error, Result};
 use crate::image_io::{check_outputs, check_writable, Format};
@@ -45,6 +50,13 @@ pub struct PointsRequest {
     /// The box [0,A)×[0,B) whose fraction of points is shown beside its area.
     #[arg(long = "box", value_name = "A,B", default_value = "0.5,0.3", value_parser = parse_box)]
     pub box_size: (f32, f32),
+    /// Where the picture shows the points: square, or after a warp: uniform, cosine, phong:E
+    /// (hemisphere, equal-area projection) or triangle (by area).
+    #[arg(long, default_value = "square", value_parser = clap::value_parser!(PointWarp))]
+    pub warp: PointWarp,
+    /// Add the dependent pair (x, x + ½ mod 1) of the first sampler's points.
+    #[arg(long)]
+    pub dependent: bool,
     /// The picture: .png or .svg.
     #[arg(short = 'o', long, value_name = "FILE")]
     pub output: Option<PathBuf>,
@@ -83,6 +95,9 @@ pub struct PointsRow {
     pub l2_star_discrepancy: f64,
     /// `[frequency, power]`, averaged over the realisations.
     pub radial_spectrum: Vec<[f64; 2]>,
+    /// `[N, rms discrepancy]` for N = 16 … 2048, and the slope of its log-log fit.
+    pub discrepancy_curve: Vec<[f64; 2]>,
+    pub discrepancy_slope: f64,
     /// The box `[a, b]` and the mean fraction of points inside it.
     #[serde(rename = "box")]
     pub box_size: [f32; 2],
@@ -90,6 +105,9 @@ pub struct PointsRow {
     /// The first realisation's points (for the picture; not in the JSON).
     #[serde(skip)]
     pub points: Vec<Vec2>,
+    /// The periodogram averaged over the realisations, `(2m+1)²` values (for the picture).
+    #[serde(skip)]
+    pub periodogram: Vec<f64>,
 }
 
 /// Every sampler's row.
@@ -103,20 +121,35 @@ pub struct PointsOutcome {
 impl PointsOutcome {
     /// A table of the rows for the terminal.
     pub fn table(&self) -> String {
+        let w = self
+            .rows
+            .iter()
+            .map(|r| r.sampler.len())
+            .max()
+            .unwrap_or(7)
+            .max(7);
         let mut s = format!(
-            "{:<12} {:>6} {:>12} {:>14} {:>22}\n",
-            "sampler", "n", "dims", "L2* discrep.", "box fraction (area)"
+            "{:<w$} {:>6} {:>12} {:>13} {:>22} {:>15} {:>12}\n",
+            "sampler",
+            "n",
+            "dims",
+            "L2* discrep.",
+            "box fraction (area)",
+            "power |k| ≤ 3",
+            "D2* slope"
         );
         for r in &self.rows {
             let low = r.radial_spectrum.iter().take(3).map(|p| p[1]).sum::<f64>() / 3.0;
             s += &format!(
-                "{:<12} {:>6} {:>12} {:>14.3e} {:>13.4} ({:.4})   power at |k| ≤ 3: {low:.3}\n",
+                "{:<w$} {:>6} {:>12} {:>13.3e} {:>13.4} ({:.4}) {:>15.3} {:>12.2}\n",
                 r.sampler,
                 r.n,
                 r.dims,
                 r.l2_star_discrepancy,
                 r.box_fraction,
-                r.box_size[0] * r.box_size[1]
+                r.box_size[0] * r.box_size[1],
+                low,
+                r.discrepancy_slope
             );
         }
         s
@@ -157,34 +190,52 @@ pub fn run(req: &PointsRequest) -> Result<PointsOutcome> {
     let dim = dimension_index(&req.dims)
         .ok_or_else(|| Error::Settings(format!("--dims {}: no such 2D dimension", req.dims)))?;
     let (a, b) = req.box_size;
-    let rows: Vec<PointsRow> = req
+    let measure = |name: String, sets: &dyn Fn(u32) -> Vec<Vec<Vec2>>| -> PointsRow {
+        let main = sets(req.n);
+        let m = main.len() as f64;
+        let p = periodogram(&main, req.max_frequency);
+        let spectrum = radial_spectrum(&p, req.max_frequency);
+        let curve: Vec<[f64; 2]> = CURVE_SIZES
+            .iter()
+            .map(|&n| [n as f64, rms_discrepancy(&sets(n))])
+            .collect();
+        let xs: Vec<f64> = curve.iter().map(|c| c[0]).collect();
+        let ys: Vec<f64> = curve.iter().map(|c| c[1].max(1e-300)).collect();
+        PointsRow {
+            sampler: name,
+            n: req.n,
+            dims: req.dims.clone(),
+            l2_star_discrepancy: rms_discrepancy(&main),
+            radial_spectrum: spectrum.iter().map(|&(k, p)| [k, p]).collect(),
+            discrepancy_slope: log_log_slope(&xs, &ys),
+            discrepancy_curve: curve,
+            box_size: [a, b],
+            box_fraction: main.iter().map(|s| fraction_in_box(s, a, b)).sum::<f64>() / m,
+            points: main[0].clone(),
+            periodogram: p,
+        }
+    };
+    let mut rows: Vec<PointsRow> = req
         .sampler
         .iter()
         .map(|&kind| {
-            let sets = realisations(kind, req.seed, req.n, dim, req.realisations);
-            let m = sets.len() as f64;
-            let d2 = sets
-                .iter()
-                .map(|s| l2_star_discrepancy(s).powi(2))
-                .sum::<f64>()
-                / m;
-            let spectrum =
-                radial_spectrum(&periodogram(&sets, req.max_frequency), req.max_frequency);
-            PointsRow {
-                sampler: kind.to_string(),
-                n: req.n,
-                dims: req.dims.clone(),
-                l2_star_discrepancy: d2.sqrt(),
-                radial_spectrum: spectrum.iter().map(|&(k, p)| [k, p]).collect(),
-                box_size: [a, b],
-                box_fraction: sets.iter().map(|s| fraction_in_box(s, a, b)).sum::<f64>() / m,
-                points: sets[0].clone(),
-            }
+            measure(kind.to_string(), &|n| {
+                realisations(kind, req.seed, n, dim, req.realisations)
+            })
         })
         .collect();
+    if req.dependent {
+        let kind = req.sampler[0];
+        rows.push(measure(format!("dependent pair of {kind}"), &|n| {
+            realisations(kind, req.seed, n, dim, req.realisations)
+                .iter()
+                .map(|s| dependent_pair(s))
+                .collect()
+        }));
+    }
     let mut written = Vec::new();
     if let Some(p) = &req.output {
-        crate::analysis::points::write_picture(p, &rows_view(&rows))?;
+        crate::analysis::theory_plots::write_points_picture(p, &rows_view(&rows, req))?;
         written.push(p.clone());
     }
     if let Some(p) = &req.json {
@@ -195,11 +246,15 @@ pub fn run(req: &PointsRequest) -> Result<PointsOutcome> {
 }
 
 /// What the picture needs of each row.
-fn rows_view(rows: &[PointsRow]) -> Vec<crate::analysis::points::Panel<'_>> {
+fn rows_view<'a>(
+    rows: &'a [PointsRow],
+    req: &PointsRequest,
+) -> Vec<crate::analysis::theory_plots::Panel<'a>> {
     rows.iter()
-        .map(|r| crate::analysis::points::Panel {
+        .map(|r| crate::analysis::theory_plots::Panel {
             label: &r.sampler,
             points: &r.points,
+            warp: req.warp,
             strata: (r.sampler == "stratified").then(|| crate::sampler::grid_shape(r.n)),
             box_size: (r.box_size[0], r.box_size[1]),
             caption: format!(
@@ -210,6 +265,8 @@ fn rows_view(rows: &[PointsRow]) -> Vec<crate::analysis::points::Panel<'_>> {
                 r.box_size[0] * r.box_size[1]
             ),
             spectrum: &r.radial_spectrum,
+            periodogram: (&r.periodogram, req.max_frequency),
+            curve: (&r.discrepancy_curve, r.discrepancy_slope),
         })
         .collect()
 }

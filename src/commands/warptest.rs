@@ -7,7 +7,12 @@
 //! and 100), a spherical triangle and a spherical rectangle seen from a point (uniform in solid
 //! angle, and warped by the receiver's cosine: the `solid-angle` and `projected` light points,
 //! through the light sampler itself), and an environment map sampled by luminance (a 64×32 sky
-//! with a sun, built here). `--pdf-scale` multiplies every pdf, to see a wrong one caught.
+//! with a sun, built here), and a learned guide's leaf: the directional quadtree of a path
+//! guide trained here on a known radiance (a dim sky, a bright lobe and a window, four
+//! iterations of recorded directions through the guide's own `add_records` and
+//! `finish_iteration`), sampled by hierarchical warping ([`crate::guiding::DTree::sample`])
+//! against its piecewise-constant pdf. `--pdf-scale` multiplies every pdf, to see a wrong one
+//! caught.
 
 use crate::environment::EnvMap;
 use crate::error::Result;
@@ -213,7 +218,63 @@ fn warps() -> Vec<Warp> {
             ..Default::default()
         },
     ));
+    let guide = std::rc::Rc::new(trained_guide_leaf());
+    let (g1, g2) = (guide.clone(), guide);
+    v.push((
+        "guide leaf (learned quadtree)".into(),
+        Box::new(move |u| Some(g1.sample(u))),
+        Box::new(move |d: Vec3| g2.pdf(d)),
+        // bins uniform in cosθ and φ about +z are the quadtree's canonical cells (64 × 64: its
+        // first six levels); the quadrature's 16 points per side resolve four levels more
+        Chi2Binning {
+            z_bins: 64,
+            phi_bins: 64,
+            quadrature: 16,
+            ..Default::default()
+        },
+    ));
     v
+}
+
+/// The directional distribution a path guide learns at one point from a known incident
+/// radiance `L(ω)` (0.1 everywhere, a lobe `40 max(0, ω·s)⁴⁰` and a window of 3 where
+/// `ω_x > 0.8`): four training iterations of 60,000 uniform directions each, recorded as the
+/// renderer records them (`L/p`), the tree refined between iterations.
+pub fn trained_guide_leaf() -> crate::guiding::DTree {
+    use crate::guiding::{dir_to_canonical, Record, SdTree};
+    let at = Vec3::splat(0.5);
+    let mut tree = SdTree::new(Vec3::ZERO, Vec3::ONE);
+    let s = Vec3::new(0.3, -0.4, 0.6).normalize();
+    let radiance = |d: Vec3| {
+        let window = if d.x > 0.8 { 3.0 } else { 0.0 };
+        0.1 + 40.0 * d.dot(s).max(0.0).powi(40) + window
+    };
+    let p = 0.25 / std::f32::consts::PI;
+    let mut u = IndependentSampler::new(0x9e1d);
+    for it in 0..4u32 {
+        let leaf = tree.leaf_at(at);
+        let n = 60_000u32;
+        let records = (0..n)
+            .map(|i| {
+                u.start_pixel_sample(UVec2::new(it, 0), i);
+                let c = u.next_2d();
+                let d = crate::guiding::canonical_to_dir(c);
+                let l = radiance(d);
+                Record {
+                    leaf,
+                    point: dir_to_canonical(d),
+                    value: l / p,
+                    product: l,
+                    pdf: p,
+                    p_bsdf: p,
+                    p_guide: p,
+                }
+            })
+            .collect();
+        tree.add_records(records);
+        tree.finish_iteration(n as u64);
+    }
+    tree.sampling(tree.leaf_at(at)).clone()
 }
 
 /// Test every warp; write the picture and the JSON asked for.

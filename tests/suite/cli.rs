@@ -1008,14 +1008,53 @@ fn points_draws_the_sets_and_writes_their_numbers() {
         "bad dims",
         "not a 2D dimension",
     );
+    // after a warp, with the dependent pair: one more row, which fails the box test (no point
+    // of (x, x + ½) lies in [0,½)×[0,0.3)), and a discrepancy curve per row
+    let out = vrpt(&[
+        "points",
+        "--n",
+        "64",
+        "--realisations",
+        "4",
+        "--warp",
+        "phong:20",
+        "--dependent",
+        "-o",
+        png.to_str().unwrap(),
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let rows: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let rows = rows.as_array().unwrap();
+    assert_eq!(rows.len(), 4);
+    assert_eq!(rows[3]["sampler"], "dependent pair of independent");
+    assert_eq!(rows[3]["box_fraction"].as_f64(), Some(0.0));
+    for r in rows {
+        assert_eq!(r["discrepancy_curve"].as_array().unwrap().len(), 8, "{r}");
+        assert!(r["discrepancy_slope"].as_f64().is_some());
+    }
+    assert_one_line_error(
+        &vrpt(&["points", "--warp", "sphere"]),
+        "bad warp",
+        "not a warp",
+    );
 }
 
 /// Issue 37: `vrpt integrate` writes a row per integrand × sampler × directions × N with the
-/// fields the issue names, and covariance rows with their pair; independent rows predict σ²/N.
+/// fields the issue names, and covariance rows with their pair; independent rows predict σ²/N;
+/// `-o` draws the variance-against-N plots, and variance rows carry their fitted slope except
+/// where `p ∝ f` (the variance there is rounding).
 #[test]
 fn integrate_writes_its_rows() {
     let dir = tempfile::tempdir().unwrap();
     let json = dir.path().join("i.json");
+    let png = dir.path().join("i.png");
     let out = vrpt(&[
         "integrate",
         "--integrand",
@@ -1026,6 +1065,8 @@ fn integrate_writes_its_rows() {
         "500",
         "--json",
         json.to_str().unwrap(),
+        "-o",
+        png.to_str().unwrap(),
     ]);
     assert!(
         out.status.success(),
@@ -1059,4 +1100,9 @@ fn integrate_writes_its_rows() {
         .iter()
         .filter(|r| r["sampler"] == "independent" && r.get("variance").is_some())
         .all(|r| r["prediction"] == "sigma2/N" && r.get("predicted_variance").is_some()));
+    assert!(png.is_file());
+    for r in rows.iter().filter(|r| r.get("variance").is_some()) {
+        let proportional = r["directions"] == "phong";
+        assert_eq!(r.get("slope").is_none(), proportional, "{r}");
+    }
 }
