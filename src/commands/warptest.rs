@@ -7,7 +7,8 @@
 //! and 100), a spherical triangle and a spherical rectangle seen from a point (uniform in solid
 //! angle, and warped by the receiver's cosine: the `solid-angle` and `projected` light points,
 //! through the light sampler itself), and an environment map sampled by luminance (a 64×32 sky
-//! with a sun, built here), and a learned guide's leaf: the directional quadtree of a path
+//! with a sun, built here), a triangle by area (the `area` light points: pdf per solid angle
+//! `dist²/(A cosθ)`), and a learned guide's leaf: the directional quadtree of a path
 //! guide trained here on a known radiance (a dim sky, a bright lobe and a window, four
 //! iterations of recorded directions through the guide's own `add_records` and
 //! `finish_iteration`), sampled by hierarchical warping ([`crate::guiding::DTree::sample`])
@@ -218,18 +219,64 @@ fn warps() -> Vec<Warp> {
             ..Default::default()
         },
     ));
+    // the triangle by area (the `area` light points): uniform on the triangle, so per solid
+    // angle `dist² / (A |cos θ_light|)`; last, so that the rows before keep their seeds
+    let emitters = vec![Emitter::triangle(0, tri, le)];
+    let lights = std::rc::Rc::new(
+        Lights::build(emitters, 1, Vec3::ZERO, 10.0).expect("a light of one triangle"),
+    );
+    let (l1, l2) = (lights.clone(), lights);
+    let centre = tri.iter().sum::<Vec3>() / 3.0;
+    let pole = (centre - p).normalize();
+    let z_lo = tri
+        .iter()
+        .map(|c| (*c - p).normalize().dot(pole))
+        .fold(1.0f32, f32::min)
+        - 0.02;
+    v.push((
+        "triangle by area".into(),
+        Box::new(move |u| {
+            l1.sampler(LightPoints::Area, LightChoice::Power)
+                .sample(p, normal, 0.5, u)
+                .map(|s| s.wi)
+        }),
+        Box::new(move |w: Vec3| {
+            if w.z >= 0.0 {
+                return 0.0;
+            }
+            let y = p + w * (-p.z / w.z);
+            let inside = (0..3).all(|i| {
+                let (a, b) = (tri[i], tri[(i + 1) % 3]);
+                (b - a).cross(y - a).z >= 0.0
+            });
+            if inside {
+                l2.sampler(LightPoints::Area, LightChoice::Power)
+                    .pdf(0, p, normal, y)
+            } else {
+                0.0
+            }
+        }),
+        Chi2Binning {
+            pole,
+            z_lo,
+            quadrature: 24,
+            floor: 0.5,
+            ..Default::default()
+        },
+    ));
     let guide = std::rc::Rc::new(trained_guide_leaf());
     let (g1, g2) = (guide.clone(), guide);
     v.push((
         "guide leaf (learned quadtree)".into(),
         Box::new(move |u| Some(g1.sample(u))),
         Box::new(move |d: Vec3| g2.pdf(d)),
-        // bins uniform in cosθ and φ about +z are the quadtree's canonical cells (64 × 64: its
-        // first six levels); the quadrature's 16 points per side resolve four levels more
+        // bins uniform in cosθ and φ about +z are the quadtree's canonical cells (32 × 32: its
+        // first five levels; few enough that a 5% pdf error moves the statistic ~10 standard
+        // deviations); the quadrature's 32 points per side resolve five levels more
         Chi2Binning {
-            z_bins: 64,
-            phi_bins: 64,
-            quadrature: 16,
+            z_bins: 32,
+            phi_bins: 32,
+            quadrature: 32,
             ..Default::default()
         },
     ));
