@@ -359,9 +359,129 @@ pub fn allocate(
         .collect()
 }
 
+/// How much an allocation by relative error can gain over uniform sampling, at equal samples,
+/// on the image it was computed from: the bounds [`allocation_gains`] gives.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AllocationGains {
+    /// `mean(e²)/mean(e)²`: the relMSE of `B` uniform samples per pixel over that of the ideal
+    /// allocation `n_i ∝ e_i` (the same `B` on average).
+    pub ideal: f64,
+    /// The same ratio for the schedule of adaptive rounds: a uniform first round of a share
+    /// `f₀` of the samples, the rest allocated by `s_i = u + (1 − u) e_i/ē` (`u` =
+    /// [`UNIFORM_SHARE`]), each round weighed by its planned size.
+    pub schedule: f64,
+    /// `f₀`.
+    pub first_share: f64,
+}
+
+/// The relMSE gains of allocating by relative error on an image (see [`AllocationGains`]).
+///
+/// Pixel `i`'s relative error per sample is `e_i = √(mean_c σ²_c/(r_c² + 0.01))`, with
+/// `σ² = v·n_eff` from the estimated variance `v` of its mean and its effective sample count
+/// (`samples`: `B²/Σ_j b_j²/n_j(i)` for rounds of planned sizes `b_j` and counts `n_j(i)`; `n`
+/// for a uniform render), `r²` from [`squared_reference`], and `e` averaged over 3×3 as the
+/// allocation sees it (which also keeps the noise of a per-pixel estimate from posing as
+/// unevenness: with 3 degrees of freedom per pixel, unsmoothed `e` would inflate the bound by
+/// ~1.18 on a perfectly even image).
+///
+/// With `B` samples per pixel the uniform relMSE is `mean(e²)/B`. A render that gives pixel `i`
+/// rounds of `n_j(i)` samples, weighed by `b_j/B`, has relMSE
+/// `mean_i Σ_j (b_j/B)² e_i²/n_j(i)`; with `n_0 = b_0 = f₀B` and `n_j = b_j s_i` after it this
+/// is `mean_i e_i² (f₀ + (1 − f₀)/s_i) / B`, so the schedule's gain is
+/// `mean(e²) / mean(e² (f₀ + (1 − f₀)/s))`, and with `f₀ → 0`, `u = 0` (`s_i = e_i/ē`) the
+/// ideal `mean(e²)/ē²`. Both assume the allocation knew `e`; what a render measures is lower by
+/// what its noisy estimates of `e` cost.
+pub fn allocation_gains(
+    width: u32,
+    mean: &[Vec3],
+    variance: &[Vec3],
+    samples: &[f64],
+    first_share: f64,
+) -> AllocationGains {
+    let w = width.max(1) as usize;
+    let h = mean.len() / w;
+    let r2 = squared_reference(width, mean, variance);
+    let e: Vec<f64> = (0..w * h)
+        .map(|i| {
+            let s: f64 = (0..3)
+                .map(|c| variance[i][c] as f64 * samples[i] / (r2[i][c] + REL_EPSILON))
+                .sum();
+            (s / 3.0).sqrt()
+        })
+        .collect();
+    let e = box3(w, h, &e);
+    let n = e.len().max(1) as f64;
+    let mean_e = e.iter().sum::<f64>() / n;
+    let mean_e2 = e.iter().map(|x| x * x).sum::<f64>() / n;
+    if !(mean_e > 0.0 && mean_e2.is_finite()) {
+        return AllocationGains {
+            ideal: 1.0,
+            schedule: 1.0,
+            first_share,
+        };
+    }
+    let f0 = first_share.clamp(0.0, 1.0);
+    let adaptive = e
+        .iter()
+        .map(|&x| {
+            let share = (UNIFORM_SHARE + (1.0 - UNIFORM_SHARE) * x / mean_e).min(MAX_SHARE);
+            x * x * (f0 + (1.0 - f0) / share)
+        })
+        .sum::<f64>()
+        / n;
+    AllocationGains {
+        ideal: mean_e2 / (mean_e * mean_e),
+        schedule: mean_e2 / adaptive,
+        first_share: f0,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The bounds on a hand-made image of two halves whose per-sample relative errors are 1
+    /// and 3 (`v = e²·1.01/n` with `r = 1`): the ideal `mean(e²)/mean(e)² = 5/4` (within 0.02:
+    /// the 3×3 box blurs the two columns at the boundary of 64), and exactly the doc's sums over
+    /// the filtered `e`; the schedule's gain lies between 1 and the ideal, is 1 when the first
+    /// round takes every sample, and an even image gains nothing.
+    #[test]
+    fn allocation_gains_follow_their_formulas() {
+        let (w, h) = (64u32, 8u32);
+        let mean = vec![Vec3::ONE; (w * h) as usize];
+        let samples = vec![16.0; (w * h) as usize];
+        let rel = |x: u32| if x < w / 2 { 1.0f64 } else { 3.0 };
+        let variance: Vec<Vec3> = (0..w * h)
+            .map(|i| Vec3::splat((rel(i % w).powi(2) * 1.01 / 16.0) as f32))
+            .collect();
+        let g = allocation_gains(w, &mean, &variance, &samples, 0.0);
+        // the same sums over the box-filtered e, written out
+        let r2 = squared_reference(w, &mean, &variance);
+        let e: Vec<f64> = (0..(w * h) as usize)
+            .map(|i| (variance[i].x as f64 * 16.0 / (r2[i].x + REL_EPSILON)).sqrt())
+            .collect();
+        let e = box3(w as usize, h as usize, &e);
+        let n = e.len() as f64;
+        let (m1, m2) = (
+            e.iter().sum::<f64>() / n,
+            e.iter().map(|x| x * x).sum::<f64>() / n,
+        );
+        assert!((g.ideal - m2 / (m1 * m1)).abs() < 1e-9);
+        assert!((g.ideal - 1.25).abs() < 0.02, "ideal {}", g.ideal);
+        let sched = m2
+            / (e.iter()
+                .map(|x| x * x / (UNIFORM_SHARE + (1.0 - UNIFORM_SHARE) * x / m1))
+                .sum::<f64>()
+                / n);
+        assert!((g.schedule - sched).abs() < 1e-9);
+        assert!(g.schedule > 1.0 && g.schedule < g.ideal);
+        // a first round of all the samples is uniform sampling
+        let all = allocation_gains(w, &mean, &variance, &samples, 1.0);
+        assert!((all.schedule - 1.0).abs() < 1e-12);
+        let even = vec![Vec3::splat(0.01); (w * h) as usize];
+        let g = allocation_gains(w, &mean, &even, &samples, 0.1);
+        assert!((g.ideal - 1.0).abs() < 1e-9 && (g.schedule - 1.0).abs() < 1e-9);
+    }
 
     #[test]
     fn replicate_spread_is_the_textbook_formula() {

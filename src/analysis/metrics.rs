@@ -282,6 +282,23 @@ pub fn mean_variance(v: &[Vec3]) -> f64 {
     v.iter().map(|p| (p.x + p.y + p.z) as f64).sum::<f64>() / (3 * v.len().max(1)) as f64
 }
 
+/// The mean over pixels and channels of `v/(r² + 0.01)`: with `v` a reference's variance of its
+/// mean and `r` its value, the floor its own noise puts under a relMSE measured against it
+/// (`E[(x − r̃)²] = (x − r)² + v` for a reference `r̃` of mean `r` and variance `v`, to first
+/// order in the denominator).
+pub fn mean_relative_variance(v: &[Vec3], r: &[Vec3]) -> f64 {
+    let sum: f64 = v
+        .iter()
+        .zip(r)
+        .map(|(v, r)| {
+            (0..3)
+                .map(|c| v[c] as f64 / ((r[c] as f64).powi(2) + REL_EPSILON))
+                .sum::<f64>()
+        })
+        .sum();
+    sum / (3 * v.len().max(1)) as f64
+}
+
 /// A perceptually ordered colour map (a 5-stop approximation of viridis), `t ∈ [0, 1]`.
 pub fn colormap(t: f64) -> [u8; 3] {
     const STOPS: [[f64; 3]; 5] = [

@@ -4,7 +4,8 @@
 
 use super::{resolve_regions, Written};
 use crate::analysis::metrics::{
-    image_bias, mean_variance, metrics, region_metrics, ImageBias, Metrics, Region,
+    image_bias, mean_relative_variance, mean_variance, metrics, region_metrics, ImageBias, Metrics,
+    Region,
 };
 use crate::analysis::plots::write_error_map;
 use crate::analysis::report::{number, Column, Report, Table};
@@ -45,6 +46,8 @@ pub struct DiffOutcome {
     pub estimate: Option<(String, f64, f64)>,
     /// The reference's mean variance of the mean (per sample): the floor under the MSE.
     pub reference_variance: Option<f64>,
+    /// The reference's mean `v/(r² + 0.01)`: the floor under the relMSE.
+    pub reference_rel_variance: Option<f64>,
     pub written: Vec<Written>,
 }
 
@@ -125,6 +128,10 @@ pub fn run(req: &DiffRequest) -> Result<DiffOutcome> {
             (how, mse, rel)
         }),
         reference_variance: r.variance.as_deref().map(mean_variance),
+        reference_rel_variance: r
+            .variance
+            .as_deref()
+            .map(|v| mean_relative_variance(v, &r.pixels)),
         written: Vec::new(),
     };
     if let Some(p) = &req.report {
@@ -169,6 +176,11 @@ impl DiffOutcome {
         }
         if let Some(v) = self.reference_variance {
             t += &format!("reference variance {v:.6e} (of its mean: the floor under the MSE)\n");
+        }
+        if let Some(v) = self.reference_rel_variance {
+            t += &format!(
+                "reference relative variance {v:.6e} (its mean v/(r²+0.01): the floor under the relMSE)\n"
+            );
         }
         if let Some(b) = &self.bias {
             if let Some(z) = b.z {

@@ -296,7 +296,16 @@ impl PreparedRender {
                 r.film.sample_counts().iter().max().copied().unwrap_or(0)
             ),
             None => String::new(),
-        };
+        } + &r.allocation.map_or(String::new(), |g| {
+            format!(
+                "adaptive: relMSE gain over uniform at equal spp, bounds from this image: ideal \
+                 (n ∝ e) {:.2}, this schedule (first round {:.0}%, uniform share {:.0}%) {:.2}\n",
+                g.ideal,
+                100.0 * g.first_share,
+                100.0 * crate::estimate::UNIFORM_SHARE,
+                g.schedule
+            )
+        });
         Ok(RenderOutcome {
             summary: r.stats.summary(&self.scene, &settings) + &adaptive + &r.estimate.summary(),
             timing: r.stats.timing(self.load_time, self.scene.accel.build_time),

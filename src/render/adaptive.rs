@@ -31,6 +31,9 @@ impl<F: SamplerFactory> Job<'_, F> {
         let mut replicates = Replicates::new(reps, raw.len());
         // each pixel's next sample index of every replicate (the same in all of them)
         let mut next = vec![first; raw.len()];
+        // per pixel Σ_j b_j²/n_j(i): its effective sample count is planned²/this
+        let mut spread = vec![0.0f64; raw.len()];
+        let mut first_planned = 0u64;
         let mut planned = 0u64; // spp per replicate planned so far
         let mut rounds = 0u32;
         let mut interrupted = false;
@@ -123,8 +126,12 @@ impl<F: SamplerFactory> Job<'_, F> {
                 replicates.add_means(rep as u32, f, size as f64);
                 raw.merge(f).map_err(Error::Settings)?;
             }
-            for (o, &c) in next.iter_mut().zip(&counts) {
+            for ((o, &c), q) in next.iter_mut().zip(&counts).zip(spread.iter_mut()) {
                 *o += c as u64;
+                *q += (size * size) as f64 / c as f64;
+            }
+            if rounds == 0 {
+                first_planned = size;
             }
             planned += size;
             last_size = size;
@@ -147,6 +154,15 @@ impl<F: SamplerFactory> Job<'_, F> {
         }
         let film = weighted(&raw, &replicates);
         let estimate = ErrorEstimate::of(&replicates, &film);
+        let b2 = (planned * planned) as f64;
+        let samples: Vec<f64> = spread.iter().map(|&q| b2 / q.max(1e-300)).collect();
+        let gains = crate::estimate::allocation_gains(
+            w,
+            &film.mean_image(),
+            &estimate.variance,
+            &samples,
+            first_planned as f64 / planned.max(1) as f64,
+        );
         Ok(Rendered {
             film,
             stats: RenderStats::default(),
@@ -155,6 +171,7 @@ impl<F: SamplerFactory> Job<'_, F> {
             interrupted,
             estimate,
             rounds: Some(rounds),
+            allocation: Some(gains),
         })
     }
 }

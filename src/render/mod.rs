@@ -432,6 +432,9 @@ pub struct Rendered {
     pub estimate: ErrorEstimate,
     /// The rounds of an adaptive render (`None`: every pixel took the same samples).
     pub rounds: Option<u32>,
+    /// An adaptive render's bounds on its relMSE gain over uniform sampling, from its own
+    /// estimates ([`crate::estimate::allocation_gains`]).
+    pub allocation: Option<crate::estimate::AllocationGains>,
 }
 
 /// The pass that holds sample `done` (relative to the render's first sample) of a render of
@@ -714,6 +717,7 @@ impl<F: SamplerFactory> Job<'_, F> {
             interrupted,
             estimate,
             rounds: None,
+            allocation: None,
         })
     }
 }

@@ -592,6 +592,20 @@ fn renders_state_their_error_and_adapt_on_request() {
         err.contains("adaptive: ") && err.contains("rounds"),
         "{err}"
     );
+    // the bounds on its gain at equal spp: the schedule's at most the ideal (Cauchy–Schwarz:
+    // no allocation with the same mean beats n ∝ e), both at least 1 (uniform is one of them)
+    let bounds: Vec<f64> = err
+        .lines()
+        .find(|l| l.contains("ideal (n ∝ e)"))
+        .unwrap_or_else(|| panic!("no bound line in {err}"))
+        .split(' ')
+        .filter_map(|w| w.trim_end_matches(',').parse::<f64>().ok())
+        .collect();
+    let (ideal, schedule) = (bounds[0], bounds[bounds.len() - 1]);
+    assert!(
+        1.0 <= schedule && schedule <= ideal + 1e-9,
+        "ideal {ideal}, schedule {schedule}"
+    );
     assert!(map.is_file());
     let img = vrpt::image_io::read_exr(&exr).unwrap();
     let meta = vrpt::output::RenderMetadata::require(&img, &exr).unwrap();
