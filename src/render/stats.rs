@@ -1,0 +1,133 @@
+//! What a render counts and how long it took ([`RenderStats`], [`GuideStats`]), and the text
+//! `vrpt render` prints of them: the summary line, and with `--stats` the split of the thread
+//! time between tracing and shading.
+
+use super::*;
+
+/// Counts and times of one render.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RenderStats {
+    /// Wall time.
+    pub elapsed: Duration,
+    /// Rays traced, by kind.
+    pub rays: RayCounts,
+    /// Path samples taken (including dropped ones).
+    pub samples: u64,
+    /// Samples dropped because their radiance was NaN or infinite.
+    pub nonfinite: u64,
+    /// Wall time summed over the tiles, i.e. over the worker threads (≈ `elapsed` × threads).
+    pub thread_time: Duration,
+    /// What path guiding's training did (guided directions only); `elapsed`, `rays` and
+    /// `thread_time` include the training, `samples` does not.
+    pub guide: Option<GuideStats>,
+}
+
+/// What the training of a guided render did.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct GuideStats {
+    /// Training iterations rendered (of 1, 2, 4, … spp).
+    pub iterations: u32,
+    /// Their samples per pixel in all.
+    pub training_spp: u64,
+    /// Wall time of the training (rendering and learning).
+    pub training: Duration,
+    /// Wall time of the final iteration (the image).
+    pub final_time: Duration,
+    /// The learned tree's size.
+    pub tree: TreeSize,
+}
+
+impl GuideStats {
+    /// One line: the time split and the tree's size.
+    pub fn summary(&self) -> String {
+        format!(
+            "guiding: training {} spp in {} iterations, {:.3} s; final iteration {:.3} s \
+             ({:.0}% of the time training); tree {} spatial leaves, {} quadtree nodes, {:.2} MiB\n",
+            self.training_spp,
+            self.iterations,
+            self.training.as_secs_f64(),
+            self.final_time.as_secs_f64(),
+            100.0 * self.training.as_secs_f64()
+                / (self.training + self.final_time).as_secs_f64().max(1e-9),
+            self.tree.leaves,
+            self.tree.quad_nodes,
+            self.tree.bytes as f64 / (1024.0 * 1024.0)
+        )
+    }
+}
+
+impl RenderStats {
+    /// Millions of rays per second of wall time.
+    pub fn mrays_per_second(&self) -> f64 {
+        self.rays.total() as f64 / self.elapsed.as_secs_f64().max(1e-9) / 1e6
+    }
+
+    /// Path samples per second of wall time.
+    pub fn samples_per_second(&self) -> f64 {
+        self.samples as f64 / self.elapsed.as_secs_f64().max(1e-9)
+    }
+
+    /// What a render of `scene` with `settings` (its spp the spp reached) did, in three lines:
+    /// the scene and its BVH, the speed, the rays by kind.
+    /// Where the time went: loading (`load`, with the BVH build inside it) and, of the render's
+    /// thread time, the share in BVH traversal and the rest (camera, sampler, surface and
+    /// shading, light sampling, film), with the traversal's own ray rate per thread. The split
+    /// needs [`RenderSettings::time_traces`]; without it only the totals are given.
+    pub fn timing(&self, load: Duration, build: Duration) -> String {
+        let thread = self.thread_time.as_secs_f64().max(1e-9);
+        let mut s = format!(
+            "time: scene load {:.1} ms (BVH build {:.1} ms), render {:.3} s = {:.3} thread-seconds",
+            load.as_secs_f64() * 1e3,
+            build.as_secs_f64() * 1e3,
+            self.elapsed.as_secs_f64(),
+            thread
+        );
+        if self.rays.timed > 0 {
+            let trace = self.rays.trace_seconds();
+            s += &format!(
+                ": trace {:.1}% ({:.2} Mrays/s per thread while tracing), shade and sample {:.1}%",
+                100.0 * trace / thread,
+                self.rays.total() as f64 / trace / 1e6,
+                100.0 * (1.0 - trace / thread)
+            );
+        }
+        s.push('\n');
+        if let Some(g) = &self.guide {
+            s += &g.summary();
+        }
+        s
+    }
+
+    /// The summary lines `vrpt render` prints: size, spp, strategy, time, rates and rays.
+    pub fn summary(&self, scene: &Scene, settings: &RenderSettings) -> String {
+        let textures = match scene.textures.textures.len() {
+            0 => String::new(),
+            n => format!(
+                ", {n} textures ({:.1} KiB)",
+                scene.textures.bytes() as f64 / 1024.0
+            ),
+        };
+        format!(
+            "{}: {} triangles, BVH built in {:.1} ms ({:.1} KiB){textures}\n\
+             rendered {}x{} at {} spp ({}, max depth {}) in {:.3} s: {:.3} M samples/s, {:.2} Mrays/s\n\
+             rays: {} ({} camera, {} bounce, {} shadow; {:.2} per sample)\n",
+            scene.source.display(),
+            scene.triangle_count(),
+            scene.accel.build_time.as_secs_f64() * 1e3,
+            scene.accel.memory_bytes() as f64 / 1024.0,
+            settings.width,
+            settings.height,
+            settings.spp,
+            settings.strategy.axes_name(),
+            settings.max_depth,
+            self.elapsed.as_secs_f64(),
+            self.samples_per_second() / 1e6,
+            self.mrays_per_second(),
+            self.rays.total(),
+            self.rays.camera,
+            self.rays.bounce,
+            self.rays.shadow,
+            self.rays.total() as f64 / self.samples.max(1) as f64
+        )
+    }
+}
