@@ -26,7 +26,7 @@
 //               "values": {"<strategy>": 1.2e-4, ...}}          opens on, best first, and each value
 // }
 //
-// The page contract checked here (src/analysis/report.html): canvas#canvas holds the view at one
+// The page contract checked here (src/analysis/report/report.html): canvas#canvas holds the view at one
 // canvas pixel per image pixel; buttons[data-mode] switch the view; #exposure is the exposure
 // range input; #ab, #ab-a, #ab-b, #divide are the A/B controls (image x < divide shows A);
 // #cbar-min/#cbar-max are the colour bar's labels (data-value exact); #inspector holds
