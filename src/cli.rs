@@ -116,7 +116,7 @@ pub struct RenderArgs {
     #[arg(long, value_name = "SECONDS", value_parser = parse_seconds, allow_negative_numbers = true)]
     pub time_limit: Option<f64>,
     /// Samples per pixel per pass, the unit of stratification (default: all, or 16 with
-    /// --time-limit).
+    /// --time-limit, whose passes then double while the time left allows).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     pub pass_spp: Option<u32>,
     /// Render only shard I of N (from 0): samples ⌊I·spp/N⌋ .. ⌊(I+1)·spp/N⌋; `vrpt merge` of

@@ -1,6 +1,12 @@
 //! Uniform passes: every pixel the same samples, pass after pass, each pass one replicate's;
 //! the stop condition (the spp, the time limit, the target error, the stop flag) read between
 //! passes, and a pass the stop flag cuts replaced by every pixel's first samples of it.
+//!
+//! Under a time limit (one replicate, no shard, no target error) the passes grow as adaptive
+//! rounds do: the first is `pass_spp`, each next one doubles while the time left allows at the
+//! last pass's samples per second, else takes what the time left allows. Each pass is one
+//! stratified set, and a set of N stratifies better than N/16 sets of 16 (lit-checker 128×96 at
+//! 10 s: relMSE 7.9× lower with passes of 1024 than of 16).
 
 use super::*;
 
@@ -28,6 +34,12 @@ impl<F: SamplerFactory> Job<'_, F> {
         let mut replicates = Replicates::new(settings.replicates, film.len());
         let mut done = range.start;
         let mut interrupted = false;
+        // passes that follow the clock (see the module doc): the last one's size and rate
+        let growing = plan.time_limit.is_some()
+            && plan.shard.is_none()
+            && plan.target_error.is_none()
+            && reps == 1;
+        let (mut last_size, mut rate) = (0u64, None::<f64>);
         while done < range.end {
             // every pass renders at least one sample per pixel (its end lies past `done`), so a
             // render stopped before its first batch still writes a sample per pixel
@@ -35,11 +47,27 @@ impl<F: SamplerFactory> Job<'_, F> {
                 interrupted = true;
                 break;
             }
-            let bounds = pass_bounds(done, pass, spp);
-            let k = bounds.start / pass;
-            let rep = (k % reps) as u32;
-            // the replicate's own sample indices: below first + spp ≤ 2³², so a u32
-            let origin = first + k / reps * pass;
+            let (bounds, k, rep, origin) = if growing {
+                let size = match (plan.time_limit, rate) {
+                    (Some(t), Some(r)) if last_size > 0 => {
+                        let left = t.saturating_sub(self.start.elapsed()).as_secs_f64();
+                        let fit = (left / (r * pixels).max(1e-12)) as u64;
+                        (2 * last_size).min(fit).max(1)
+                    }
+                    _ => pass,
+                };
+                (done..(done + size).min(spp), 0, 0, first + done)
+            } else {
+                let bounds = pass_bounds(done, pass, spp);
+                let k = bounds.start / pass;
+                // the replicate's own sample indices: below first + spp ≤ 2³², so a u32
+                (
+                    bounds.clone(),
+                    k,
+                    (k % reps) as u32,
+                    first + k / reps * pass,
+                )
+            };
             let set = SamplePass {
                 origin: origin as u32,
                 size: (bounds.end - bounds.start) as u32,
@@ -48,26 +76,31 @@ impl<F: SamplerFactory> Job<'_, F> {
             let at = |done: u64| origin + done - bounds.start;
             let mut pass_film = Film::new(settings.width, settings.height);
             if plan.stop.is_none() {
-                self.batch(
+                let (r, _) = self.batch(
                     rep,
                     (set, at(done)..at(end), None, None),
                     &mut pass_film,
                     stats,
                 );
+                rate = r.or(rate);
+                last_size = end - done;
                 done = end;
             } else {
-                let (rate, cut) = self.batch(
+                let (rate_cut, cut) = self.batch(
                     rep,
                     (set, at(done)..at(end), plan.stop, None),
                     &mut pass_film,
                     stats,
                 );
+                rate = rate_cut.or(rate);
                 if !cut {
+                    last_size = end - done;
                     done = end;
                 } else {
                     // stopped inside the pass: drop it, take every pixel's first samples of it
                     // instead (one when no pixel finished, so no rate is known)
-                    let n = rate.map_or(1, |r| (BATCH_SECONDS / (r * pixels).max(1e-12)) as u64);
+                    let n =
+                        rate_cut.map_or(1, |r| (BATCH_SECONDS / (r * pixels).max(1e-12)) as u64);
                     let n = n.clamp(1, end - done);
                     pass_film = Film::new(settings.width, settings.height);
                     self.batch(

@@ -305,12 +305,13 @@ fn time_limited_render(extra: &[&str]) -> vrpt::output::RenderMetadata {
 }
 
 /// `--time-limit`: the render stops at the first whole pass after the limit, and the image
-/// records the spp it reached (a multiple of the pass size, far below the --spp cap) and the
+/// records the spp it reached (at least the first pass, far below the --spp cap) and the
 /// limit.
 #[test]
 fn time_limited_render_stops_at_a_whole_pass() {
     let m = time_limited_render(&["--time-limit", "0.3"]);
-    assert!(m.spp >= 4 && m.spp.is_multiple_of(4), "spp {}", m.spp);
+    // the first pass is 4 spp; the next ones double or take what the time left allows
+    assert!(m.spp >= 4, "spp {}", m.spp);
     // 10⁸ spp of 256 pixels would take hours: the limit stopped it
     assert!(m.spp < 100_000_000, "spp {}", m.spp);
     assert_eq!(m.pass_spp, Some(4));
@@ -547,11 +548,8 @@ fn time_limited_guided_render_trains_inside_the_limit() {
     assert_eq!(g.training_spp, (1u64 << g.iterations) - 1);
     // half of 10⁸ spp of training would take hours: the time limit ended it
     assert!(g.training_spp < 50_000_000, "{g:?}");
-    assert!(
-        m.spp >= 4 && m.spp.is_multiple_of(4) && m.spp < 100_000_000,
-        "spp {}",
-        m.spp
-    );
+    // the passes after the first (4 spp) double or take what the time left allows
+    assert!(m.spp >= 4 && m.spp < 100_000_000, "spp {}", m.spp);
     assert!(m.render_seconds >= 0.5, "{}", m.render_seconds);
     assert!(
         g.training_seconds < m.render_seconds,

@@ -366,3 +366,49 @@ fn defaults_keep_their_error_on_the_cornell_box() {
         "four replicates (MSE {four:.4e}) pass the defaults' bound: the bound catches nothing"
     );
 }
+
+/// Under a time limit the passes follow the clock: the first is `pass_spp`, each next one at
+/// most doubles, and they do grow (on a 16×16 image a 4-spp pass takes about a millisecond,
+/// so the second fits twice over in the 0.5 s limit on any machine within 100× of this one);
+/// with a shard or several replicates they stay `pass_spp`. The factory sees every pass's set.
+#[test]
+fn time_limited_passes_double_while_the_time_allows() {
+    use std::sync::Mutex;
+    use vrpt::render::{render_passes_with, NoProgress, PassPlan, RenderSettings, SamplePass};
+    let scene = vrpt::scene::load(&common::cornell_path()).unwrap();
+    let seen = Mutex::new(Vec::<SamplePass>::new());
+    let factory = |seed: u64, pass: SamplePass| {
+        seen.lock().unwrap().push(pass);
+        vrpt::sampler::StratifiedSampler::with_origin(seed, pass.size, pass.origin)
+    };
+    let settings = RenderSettings {
+        width: 16,
+        height: 16,
+        spp: 1 << 24,
+        ..RenderSettings::default()
+    };
+    let plan = PassPlan {
+        pass_spp: Some(4),
+        time_limit: Some(std::time::Duration::from_millis(500)),
+        ..PassPlan::default()
+    };
+    let r = render_passes_with(&scene, &settings, &plan, &factory, &NoProgress).unwrap();
+    let sizes: Vec<u32> = seen.lock().unwrap().iter().map(|p| p.size).collect();
+    assert_eq!(sizes[0], 4, "{sizes:?}");
+    assert!(sizes.windows(2).all(|w| w[1] <= 2 * w[0]), "{sizes:?}");
+    assert!(sizes.iter().any(|&n| n > 4), "{sizes:?}");
+    // the sets are consecutive: each starts where the one before ended
+    let passes = seen.lock().unwrap().clone();
+    assert!(passes
+        .windows(2)
+        .all(|w| w[1].origin == w[0].origin + w[0].size));
+    assert_eq!(r.spp, sizes.iter().sum::<u32>());
+    // with two replicates every pass is pass_spp
+    seen.lock().unwrap().clear();
+    let two = RenderSettings {
+        replicates: 2,
+        ..settings
+    };
+    render_passes_with(&scene, &two, &plan, &factory, &NoProgress).unwrap();
+    assert!(seen.lock().unwrap().iter().all(|p| p.size == 4));
+}
