@@ -141,53 +141,13 @@ fn warps() -> Vec<Warp> {
                 Emitter::triangle(1, [corners[0], corners[2], corners[3]], le),
             ]
         };
-        let centre = corners.iter().sum::<Vec3>() / corners.len() as f32;
-        let pole = (centre - p).normalize();
-        let z_lo = corners
-            .iter()
-            .map(|c| (*c - p).normalize().dot(pole))
-            .fold(1.0f32, f32::min)
-            - 0.02;
         for points in [LightPoints::SolidAngle, LightPoints::Projected] {
-            let lights = std::rc::Rc::new(
-                Lights::build(emitters.clone(), emitters.len(), Vec3::ZERO, 10.0)
-                    .expect("a light of two triangles"),
-            );
-            let (l1, l2) = (lights.clone(), lights);
-            let corners = corners.to_vec();
-            v.push((
+            v.push(light_warp(
                 format!("{shape} ({points})"),
-                Box::new(move |u| {
-                    l1.sampler(points, LightChoice::Power)
-                        .sample(p, normal, 0.5, u)
-                        .map(|s| s.wi)
-                }),
-                Box::new(move |w: Vec3| {
-                    // the point of the light plane in direction w, if it lies on the light
-                    if w.z >= 0.0 {
-                        return 0.0;
-                    }
-                    let y = p + w * (-p.z / w.z);
-                    let k = corners.len();
-                    let inside = (0..k).all(|i| {
-                        let (a, b) = (corners[i], corners[(i + 1) % k]);
-                        (b - a).cross(y - a).z >= 0.0
-                    });
-                    if inside {
-                        l2.sampler(points, LightChoice::Power).pdf(0, p, normal, y)
-                    } else {
-                        0.0
-                    }
-                }),
-                // fine quadrature, and a floor of half a sample per bin: the pdf steps to 0 at
-                // the light's outline, and a sliver of a bin it crosses must not expect nothing
-                Chi2Binning {
-                    pole,
-                    z_lo,
-                    quadrature: 24,
-                    floor: 0.5,
-                    ..Default::default()
-                },
+                &emitters,
+                corners,
+                points,
+                (p, normal),
             ));
         }
     }
@@ -221,48 +181,12 @@ fn warps() -> Vec<Warp> {
     ));
     // the triangle by area (the `area` light points): uniform on the triangle, so per solid
     // angle `dist² / (A |cos θ_light|)`; last, so that the rows before keep their seeds
-    let emitters = vec![Emitter::triangle(0, tri, le)];
-    let lights = std::rc::Rc::new(
-        Lights::build(emitters, 1, Vec3::ZERO, 10.0).expect("a light of one triangle"),
-    );
-    let (l1, l2) = (lights.clone(), lights);
-    let centre = tri.iter().sum::<Vec3>() / 3.0;
-    let pole = (centre - p).normalize();
-    let z_lo = tri
-        .iter()
-        .map(|c| (*c - p).normalize().dot(pole))
-        .fold(1.0f32, f32::min)
-        - 0.02;
-    v.push((
+    v.push(light_warp(
         "triangle by area".into(),
-        Box::new(move |u| {
-            l1.sampler(LightPoints::Area, LightChoice::Power)
-                .sample(p, normal, 0.5, u)
-                .map(|s| s.wi)
-        }),
-        Box::new(move |w: Vec3| {
-            if w.z >= 0.0 {
-                return 0.0;
-            }
-            let y = p + w * (-p.z / w.z);
-            let inside = (0..3).all(|i| {
-                let (a, b) = (tri[i], tri[(i + 1) % 3]);
-                (b - a).cross(y - a).z >= 0.0
-            });
-            if inside {
-                l2.sampler(LightPoints::Area, LightChoice::Power)
-                    .pdf(0, p, normal, y)
-            } else {
-                0.0
-            }
-        }),
-        Chi2Binning {
-            pole,
-            z_lo,
-            quadrature: 24,
-            floor: 0.5,
-            ..Default::default()
-        },
+        &[Emitter::triangle(0, tri, le)],
+        &tri,
+        LightPoints::Area,
+        (p, normal),
     ));
     let guide = std::rc::Rc::new(trained_guide_leaf());
     let (g1, g2) = (guide.clone(), guide);
@@ -281,6 +205,65 @@ fn warps() -> Vec<Warp> {
         },
     ));
     v
+}
+
+/// The warp of a light's points seen from `p` (shading normal `normal`): the light sampler's
+/// directions toward `emitters` (a light in the plane z = 0 with outline `corners`, facing +z)
+/// beside its pdf per solid angle, binned about the light's centre.
+fn light_warp(
+    name: String,
+    emitters: &[Emitter],
+    corners: &[Vec3],
+    points: LightPoints,
+    (p, normal): (Vec3, Vec3),
+) -> Warp {
+    let lights = std::rc::Rc::new(
+        Lights::build(emitters.to_vec(), emitters.len(), Vec3::ZERO, 10.0)
+            .expect("a light of one or two triangles"),
+    );
+    let (l1, l2) = (lights.clone(), lights);
+    let centre = corners.iter().sum::<Vec3>() / corners.len() as f32;
+    let pole = (centre - p).normalize();
+    let z_lo = corners
+        .iter()
+        .map(|c| (*c - p).normalize().dot(pole))
+        .fold(1.0f32, f32::min)
+        - 0.02;
+    let corners = corners.to_vec();
+    (
+        name,
+        Box::new(move |u| {
+            l1.sampler(points, LightChoice::Power)
+                .sample(p, normal, 0.5, u)
+                .map(|s| s.wi)
+        }),
+        Box::new(move |w: Vec3| {
+            // the point of the light plane in direction w, if it lies on the light
+            if w.z >= 0.0 {
+                return 0.0;
+            }
+            let y = p + w * (-p.z / w.z);
+            let k = corners.len();
+            let inside = (0..k).all(|i| {
+                let (a, b) = (corners[i], corners[(i + 1) % k]);
+                (b - a).cross(y - a).z >= 0.0
+            });
+            if inside {
+                l2.sampler(points, LightChoice::Power).pdf(0, p, normal, y)
+            } else {
+                0.0
+            }
+        }),
+        // fine quadrature, and a floor of half a sample per bin: the pdf steps to 0 at the
+        // light's outline, and a sliver of a bin it crosses must not expect nothing
+        Chi2Binning {
+            pole,
+            z_lo,
+            quadrature: 24,
+            floor: 0.5,
+            ..Default::default()
+        },
+    )
 }
 
 /// The directional distribution a path guide learns at one point from a known incident
