@@ -12,7 +12,6 @@ use crate::analysis::integrate::{
 };
 use crate::analysis::theory_plots::{write_integrate_picture, ConvergencePanel};
 use crate::error::Result;
-use crate::image_io::{check_image_path, check_outputs, check_writable};
 use crate::sampler::SamplerKind;
 use std::path::PathBuf;
 
@@ -99,16 +98,7 @@ pub struct IntegrateOutcome {
 
 /// Estimate every integral asked for; write the JSON asked for.
 pub fn run(req: &IntegrateRequest) -> Result<IntegrateOutcome> {
-    check_outputs(
-        &super::given(&[("-o", &req.output), ("--json", &req.json)]),
-        &[],
-    )?;
-    if let Some(p) = &req.output {
-        check_image_path(p)?;
-    }
-    if let Some(p) = &req.json {
-        check_writable(p)?;
-    }
+    super::check_picture_and_json(&req.output, &req.json, true)?;
     let mut rows = Vec::new();
     for &f in &req.integrand {
         for &d in f.domains() {

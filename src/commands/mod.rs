@@ -59,6 +59,41 @@ pub(crate) fn given<'a>(
         .collect()
 }
 
+/// Check, before any work, the outputs of a command that draws a picture (`-o`) and writes
+/// numbers (`--json`): distinct paths, writable, and the picture a `.png` (or `.svg` where the
+/// command draws vectors), each refusal one line.
+pub(crate) fn check_picture_and_json(
+    output: &Option<PathBuf>,
+    json: &Option<PathBuf>,
+    svg: bool,
+) -> Result<()> {
+    crate::image_io::check_outputs(&given(&[("-o", output), ("--json", json)]), &[])?;
+    if let Some(p) = output {
+        let ext = p
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase);
+        match ext.as_deref() {
+            Some("png") => {}
+            Some("svg") if svg => {}
+            _ => {
+                return Err(crate::error::Error::Write {
+                    path: p.clone(),
+                    message: format!(
+                        "a picture is written as {}",
+                        if svg { ".png or .svg" } else { ".png" }
+                    ),
+                })
+            }
+        }
+        crate::image_io::check_writable(p)?;
+    }
+    if let Some(p) = json {
+        crate::image_io::check_writable(p)?;
+    }
+    Ok(())
+}
+
 /// Write `value` to `path` as pretty JSON (atomically).
 pub(crate) fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> Result<()> {
     let text = serde_json::to_string_pretty(value)

@@ -15,7 +15,6 @@ use crate::analysis::points::{
     rms_discrepancy, PointWarp, CURVE_SIZES,
 };
 use crate::error::{Error, Result};
-use crate::image_io::{check_outputs, check_writable, Format};
 use crate::render::{independent, sobol, stratified};
 use crate::sampler::SamplerKind;
 use glam::{UVec2, Vec2};
@@ -173,20 +172,7 @@ pub fn realisations(kind: SamplerKind, seed: u64, n: u32, dim: usize, m: u32) ->
 
 /// Draw and measure every sampler's sets; write the picture and the JSON asked for.
 pub fn run(req: &PointsRequest) -> Result<PointsOutcome> {
-    check_outputs(
-        &super::given(&[("-o", &req.output), ("--json", &req.json)]),
-        &[],
-    )?;
-    if let Some(p) = &req.output {
-        let svg = p.extension().is_some_and(|e| e.eq_ignore_ascii_case("svg"));
-        if !svg {
-            Format::from_path(p)?;
-        }
-        check_writable(p)?;
-    }
-    if let Some(p) = &req.json {
-        check_writable(p)?;
-    }
+    super::check_picture_and_json(&req.output, &req.json, true)?;
     let dim = dimension_index(&req.dims)
         .ok_or_else(|| Error::Settings(format!("--dims {}: no such 2D dimension", req.dims)))?;
     let (a, b) = req.box_size;

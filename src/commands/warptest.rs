@@ -17,7 +17,6 @@
 
 use crate::environment::EnvMap;
 use crate::error::Result;
-use crate::image_io::{check_image_path, check_outputs, check_writable};
 use crate::lights::{Emitter, LightChoice, LightPoints, Lights};
 use crate::sampler::{IndependentSampler, Sampler};
 use crate::sampling::{
@@ -309,16 +308,7 @@ pub fn trained_guide_leaf() -> crate::guiding::DTree {
 
 /// Test every warp; write the picture and the JSON asked for.
 pub fn run(req: &WarptestRequest) -> Result<WarptestOutcome> {
-    check_outputs(
-        &super::given(&[("-o", &req.output), ("--json", &req.json)]),
-        &[],
-    )?;
-    if let Some(p) = &req.output {
-        check_image_path(p)?;
-    }
-    if let Some(p) = &req.json {
-        check_writable(p)?;
-    }
+    super::check_picture_and_json(&req.output, &req.json, false)?;
     let rows: Vec<WarpRow> = warps()
         .into_iter()
         .enumerate()

@@ -1113,6 +1113,28 @@ fn integrate_writes_its_rows() {
         .filter(|r| r["sampler"] == "independent" && r.get("variance").is_some())
         .all(|r| r["prediction"] == "sigma2/N" && r.get("predicted_variance").is_some()));
     assert!(png.is_file());
+    // the plots as SVG too; a picture of another kind is refused in one line, before any work
+    let svg = dir.path().join("i.svg");
+    let quick = [
+        "integrate",
+        "--integrand",
+        "smooth",
+        "--n",
+        "16",
+        "--repetitions",
+        "100",
+        "-o",
+    ];
+    let out = vrpt(&[&quick[..], &[svg.to_str().unwrap()]].concat());
+    assert!(out.status.success());
+    assert!(std::fs::read_to_string(&svg).unwrap().starts_with("<svg"));
+    let exr = dir.path().join("i.exr");
+    assert_one_line_error(
+        &vrpt(&[&quick[..], &[exr.to_str().unwrap()]].concat()),
+        "an EXR plot",
+        "written as .png or .svg",
+    );
+    assert!(!exr.exists());
     for r in rows.iter().filter(|r| r.get("variance").is_some()) {
         let proportional = r["directions"] == "phong";
         assert_eq!(r.get("slope").is_none(), proportional, "{r}");
