@@ -1,0 +1,67 @@
+//! Next-event estimation at a vertex: one light sample `y` (direction `ωᵢ`, pdf `p_light` per
+//! solid angle, the light's choice included) and a shadow ray; what it adds is
+//! `β f(ωₒ, ωᵢ) cosθᵢ Le(y) w / p_light` if `y` is visible, with `w = 1` under `nee` and the power
+//! heuristic `w(p_light, p_bsdf)` under `mis`, `p_bsdf` the pdf with which the bounce's own
+//! direction strategy (the guided mixture where there is a guide) would have drawn `ωᵢ`.
+
+use super::{mis_weight, timed, Path, RayCounts, Vertex};
+use crate::accel::TraceStack;
+use crate::bsdf::Bsdf;
+use crate::guiding::GuideAt;
+use crate::lights::LightStrategy;
+use crate::sampler::layout::BounceSample;
+use glam::Vec3;
+
+impl Path<'_> {
+    /// What the light sample at `v` adds to the path's radiance (throughput `beta` so far), or
+    /// `None` where it adds nothing: no light, a light behind the surface, a black BSDF in its
+    /// direction, or a shadow ray that is blocked.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    pub(super) fn next_event(
+        &self,
+        v: &Vertex,
+        bsdf: &Bsdf,
+        g: Option<&GuideAt>,
+        u: &BounceSample,
+        beta: Vec3,
+        rays: &mut RayCounts,
+        stack: &mut TraceStack,
+    ) -> Option<Vec3> {
+        let (scene, settings) = (self.scene, self.settings);
+        let ls = self.lights.sample(v.p, v.ns, u.light, u.light_point)?;
+        let wi_local = v.frame.to_local(ls.wi);
+        // light from below the geometric surface cannot arrive (as for BSDF samples)
+        if !(ls.wi.dot(v.ng) > 0.0 && wi_local.z > 0.0) {
+            return None;
+        }
+        let f = bsdf.eval(v.wo_local, wi_local);
+        if f.max_element() > 0.0 {
+            let (to, tmax) = if ls.dist.is_finite() {
+                let y = v.p + ls.wi * ls.dist;
+                let d = y - v.spawn;
+                let len = d.length();
+                (d / len, len - 2.0 * scene.ray_epsilon)
+            } else {
+                (ls.wi, f32::INFINITY)
+            };
+            rays.shadow += 1;
+            if tmax > 0.0
+                && !timed(settings.time_traces, rays, || {
+                    scene.occluded(stack, v.spawn, to, tmax)
+                })
+            {
+                let w = match settings.lights {
+                    LightStrategy::Mis => {
+                        let p = bsdf.pdf(v.wo_local, wi_local, settings.directions);
+                        let p = g.map_or(p, |g| g.mixture_pdf(ls.wi, p));
+                        mis_weight(ls.pdf, p)
+                    }
+                    _ => 1.0,
+                };
+                return Some(beta * f * ls.le * (wi_local.z * w / ls.pdf));
+            }
+        }
+        None
+    }
+}

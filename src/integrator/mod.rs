@@ -1,0 +1,486 @@
+//! Unidirectional path tracing, with the light found by BSDF sampling, next-event estimation or
+//! both under multiple importance sampling ([`LightStrategy`]).
+//!
+//! A path is built by sampling each bounce from the BSDF with the chosen [`Directions`]
+//! strategy; the throughput is `β_{k+1} = β_k · f · cosθᵢ / p_bsdf`. What a vertex `x_k` adds:
+//!
+//! - `bsdf`: `β_k Le(x_k)` when `x_k` is an emitter seen from its front, or the environment
+//!   when the ray escapes (Veach's "BSDF sampling").
+//! - `nee`: at every vertex one light sample `y` (direction `ωᵢ`, pdf `p_light` per solid angle)
+//!   and a shadow ray: `β_k f(ωₒ, ωᵢ) cosθᵢ Le(y) / p_light` if `y` is visible. Emission reached
+//!   by BSDF-sampled rays after the camera ray is not added: the light samples counted it.
+//! - `mis`: both, weighted by the power heuristic [`mis_weight`]: the light sample by
+//!   `w(p_light, p_bsdf)`, emission hit by a BSDF-sampled ray by `w(p_bsdf, p_light)`, with
+//!   `p_bsdf` the pdf of the current `--directions` strategy and `p_light` the pdf with which
+//!   light sampling at the previous vertex picks the same direction. For every path both can
+//!   make the two weights sum to 1, so the estimator is unbiased.
+//!
+//! Emission is one-sided (front faces only). Path length: `max_depth` is the largest number of
+//! segments of a path, counting the camera ray (1 = only directly visible emitters, as
+//! Mitsuba's `max_depth`); a light sample at the vertex ending segment `k` makes a path of
+//! `k + 1` segments, so it is taken only where a bounce would be. Russian roulette from the
+//! third bounce on keeps a path with probability `q = min(max β, 0.95)` and divides by `q`:
+//! unbiased termination, after the light sample of that vertex (roulette does not enter the
+//! MIS weights: any weights that sum to 1 keep the estimator unbiased). With a guide, `q` is
+//! the larger of that and the guide's [`GuideAt::survival`]: a guided bounce toward a small
+//! bright opening has a large pdf, so a small `β`, and the throughput rule alone cut nearly
+//! every such path (on the door at 10 s guided MSE 1.2× lower with the guide's rule).
+//!
+//! With `--directions guided` a bounce samples its direction from the mixture of the Phong
+//! lobes and the learned guide of [`crate::guiding`] (one-sample MIS, pdf
+//! `α·p_guide + (1−α)·p_bsdf`), and that mixture pdf is `p_bsdf` in both MIS weights above. A
+//! training render also records, at each bounce, the radiance that came back along the sampled
+//! direction (see [`crate::guiding`]) into a [`Record`] buffer, in the S-tree leaf the spatial
+//! box filter picks (jittered by a hash of the vertex and the direction: training only, so the
+//! image's samples are untouched).
+//!
+//! Every bounce draws the same dimensions in the same order ([`BounceSample`], the layout in
+//! [`crate::sampler::layout`]), used or not, so a dimension index means the same decision in
+//! every sample — which is what stratification needs.
+//!
+//! Rooms: this module holds the path loop (`Path::trace`: what a vertex adds, the bounce, the
+//! roulette) and the one emission weight; `direct` the light sample of a vertex (next-event
+//! estimation and its MIS weight); `recorder` what a training render keeps of a path
+//! (a [`PathRecorder`], the guide's records; an image's paths have none), so guided and
+//! unguided paths are one loop.
+
+mod direct;
+mod recorder;
+
+pub use recorder::MAX_RECORDED_BOUNCES;
+use recorder::{Mixture, PathRecorder, Training};
+
+use crate::accel::TraceStack;
+use crate::bsdf::{Bsdf, BsdfSample, Directions};
+use crate::guiding::{canonical_to_dir, dir_to_canonical, GuideAt, Record, SdTree};
+use crate::lights::{LightChoice, LightPoints, LightSampler, LightStrategy};
+use crate::math::Frame;
+use crate::sampler::layout::BounceSample;
+use crate::sampler::Sampler;
+use crate::scene::{Scene, SurfacePoint};
+use glam::Vec3;
+
+/// Bounces (vertices after the camera) before Russian roulette may end a path.
+pub const RR_START_BOUNCE: u32 = 3;
+
+/// What the integrator needs to know besides the scene.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct IntegratorSettings {
+    /// Largest number of path segments, counting the camera ray (≥ 1).
+    pub max_depth: u32,
+    pub directions: Directions,
+    pub lights: LightStrategy,
+    /// How points on lights are placed and lights chosen.
+    pub light_points: LightPoints,
+    pub light_choice: LightChoice,
+    /// Time one traversal (closest hit or shadow ray) in every [`TIMED_RAY_EVERY`] into
+    /// [`RayCounts::trace_ns`]; off unless asked for (`vrpt render --stats`).
+    pub time_traces: bool,
+    /// Factor on the guided mixture pdf the estimator divides by: 1, except in the tests that
+    /// show a wrong pdf is caught.
+    #[doc(hidden)]
+    pub guide_pdf_scale: f32,
+}
+
+/// Rays traced, by kind.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RayCounts {
+    pub camera: u64,
+    /// Rays continuing a path after a bounce.
+    pub bounce: u64,
+    /// Occlusion rays toward light samples.
+    pub shadow: u64,
+    /// Nanoseconds spent in the timed traversals, when [`IntegratorSettings::time_traces`]
+    /// is on.
+    pub trace_ns: u64,
+    /// How many traversals were timed.
+    pub timed: u64,
+}
+
+impl RayCounts {
+    /// All rays.
+    pub fn total(&self) -> u64 {
+        self.camera + self.bounce + self.shadow
+    }
+
+    /// Add `o`'s counts.
+    pub fn add(&mut self, o: &RayCounts) {
+        self.camera += o.camera;
+        self.bounce += o.bounce;
+        self.shadow += o.shadow;
+        self.trace_ns += o.trace_ns;
+        self.timed += o.timed;
+    }
+
+    /// Estimated time in BVH traversal: the timed rays' time, less the clock's own cost inside
+    /// each interval ([`clock_overhead_ns`]), scaled to all rays (the timed ones are every
+    /// [`TIMED_RAY_EVERY`]-th ray by count, of every kind).
+    pub fn trace_seconds(&self) -> f64 {
+        if self.timed == 0 {
+            return 0.0;
+        }
+        let ns = (self.trace_ns as f64 - self.timed as f64 * clock_overhead_ns()).max(0.0);
+        ns * 1e-9 * self.total() as f64 / self.timed as f64
+    }
+}
+
+/// The power heuristic (β = 2) of Veach & Guibas 1995 for a sample drawn by the strategy of pdf
+/// `p_a`, when the strategy of pdf `p_b` could have drawn it too:
+/// `w_a = p_a² / (p_a² + p_b²)`. Both pdfs per unit solid angle; `w_a + w_b = 1` whenever
+/// either is positive. Written as `1 / (1 + (p_b/p_a)²)` so huge pdfs do not overflow.
+#[inline]
+pub fn mis_weight(p_a: f32, p_b: f32) -> f32 {
+    if p_a <= 0.0 {
+        return 0.0;
+    }
+    let r = p_b / p_a;
+    1.0 / (1.0 + r * r)
+}
+
+/// With timing on, one ray in this many is timed: two clock reads (~40 ns here) on every ray
+/// would add a fifth to the render and inflate the traced share; one in 16 costs ~1%.
+pub const TIMED_RAY_EVERY: u64 = 16;
+
+/// The most one timed traversal counts, in nanoseconds: 16× the slowest ray measured (0.63 µs
+/// per incoherent ray through 4 million triangles); longer intervals are preemption.
+const MAX_TRACE_NS: u64 = 10_000;
+
+/// What an empty interval of `timed` measures (the clock read's own cost), in nanoseconds:
+/// the mean of 10,000 empty intervals, measured once per process.
+pub fn clock_overhead_ns() -> f64 {
+    static OVERHEAD: std::sync::OnceLock<f64> = std::sync::OnceLock::new();
+    *OVERHEAD.get_or_init(|| {
+        let n = 10_000u32;
+        let mut total = 0u128;
+        for _ in 0..n {
+            let start = std::time::Instant::now();
+            total += std::hint::black_box(start).elapsed().as_nanos();
+        }
+        total as f64 / n as f64
+    })
+}
+
+/// `f()` (a traversal, already counted in `rays`), timed when `on` and it is the
+/// [`TIMED_RAY_EVERY`]-th ray.
+#[inline(always)]
+fn timed<T>(on: bool, rays: &mut RayCounts, f: impl FnOnce() -> T) -> T {
+    if on && rays.total().is_multiple_of(TIMED_RAY_EVERY) {
+        let start = std::time::Instant::now();
+        let r = f();
+        // an interval longer than any traversal is the thread being descheduled: scaled by
+        // TIMED_RAY_EVERY it would swamp the estimate, so it counts as MAX_TRACE_NS
+        rays.trace_ns += (start.elapsed().as_nanos() as u64).min(MAX_TRACE_NS);
+        rays.timed += 1;
+        r
+    } else {
+        f()
+    }
+}
+
+/// The vertex a BSDF-sampled ray left from: what the MIS weight of what it hits needs.
+#[derive(Clone, Copy, Debug)]
+struct Previous {
+    /// Position of the vertex.
+    p: Vec3,
+    /// Its shading normal, on the side the ray left from.
+    n: Vec3,
+    /// The BSDF pdf of the sampled direction.
+    pdf: f32,
+}
+
+impl Previous {
+    /// The vertex `v` a ray left in a direction of BSDF pdf `pdf`.
+    #[inline(always)]
+    fn left(v: &Vertex, pdf: f32) -> Self {
+        Previous {
+            p: v.p,
+            n: v.ns,
+            pdf,
+        }
+    }
+}
+
+/// The probability that Russian roulette keeps a path of throughput `beta` (after the bounce):
+/// `min(max β, 0.95)`, or with a guided bounce the larger of that and the guide's
+/// [`GuideAt::survival`].
+#[inline(always)]
+fn survival(beta: Vec3, guided: Option<(&GuideAt, &Mixture)>) -> f32 {
+    let q = beta.max_element().min(0.95);
+    match guided {
+        Some((g, mix)) => q.max(g.survival(beta, mix.p_guide)),
+        None => q,
+    }
+}
+
+/// A surface vertex as a bounce sees it: both normals on the side the ray came from, the
+/// shading frame, `wo` in it, and the point new rays leave from.
+struct Vertex {
+    p: Vec3,
+    /// The geometric normal, on the side of `wo`.
+    ng: Vec3,
+    /// The shading normal, on the side of `wo` (the geometric one where it faced away).
+    ns: Vec3,
+    frame: Frame,
+    wo_local: Vec3,
+    /// `p` offset along `ng` by the scene's ray epsilon.
+    spawn: Vec3,
+}
+
+impl Vertex {
+    /// Two-sided shading: both normals are put on the side the ray came from (`wo` points
+    /// back along it).
+    #[inline(always)]
+    fn new(scene: &Scene, s: &SurfacePoint, front: bool, wo: Vec3) -> Self {
+        let (ng, mut ns) = if front { (s.ng, s.ns) } else { (-s.ng, -s.ns) };
+        if ns.dot(wo) <= 0.0 {
+            ns = ng; // the shading normal faces away from the viewer: fall back to geometry
+        }
+        let frame = Frame::from_normal(ns);
+        Vertex {
+            p: s.p,
+            ng,
+            ns,
+            wo_local: frame.to_local(wo),
+            frame,
+            spawn: s.p + ng * scene.ray_epsilon,
+        }
+    }
+}
+
+/// Radiance arriving at `origin` from direction `dir` (unit); rays traced are added to `rays`,
+/// on the thread's traversal stack `stack`.
+#[inline]
+pub fn radiance<S: Sampler>(
+    scene: &Scene,
+    ray: (Vec3, Vec3),
+    sampler: &mut S,
+    settings: &IntegratorSettings,
+    rays: &mut RayCounts,
+    stack: &mut TraceStack,
+) -> Vec3 {
+    radiance_guided(scene, ray, sampler, settings, rays, stack, None, None)
+}
+
+/// [`radiance`] with path guiding: directions of `--directions guided` are sampled from the
+/// mixture of the Phong lobes and `guide` (which must be given for them), and with `records`
+/// every bounce's radiance record is appended to it (a training iteration).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub fn radiance_guided<S: Sampler>(
+    scene: &Scene,
+    ray: (Vec3, Vec3),
+    sampler: &mut S,
+    settings: &IntegratorSettings,
+    rays: &mut RayCounts,
+    stack: &mut TraceStack,
+    guide: Option<&SdTree>,
+    records: Option<&mut Vec<Record>>,
+) -> Vec3 {
+    let path = Path::new(scene, settings, guide);
+    match records {
+        Some(out) => path.trace(ray, sampler, rays, stack, Some(&mut Training::new(out))),
+        None => path.trace(ray, sampler, rays, stack, None),
+    }
+}
+
+/// What every vertex of one path's estimate reads: the scene, the settings, the light sampler
+/// they choose and the guide (only for guided directions).
+struct Path<'a> {
+    scene: &'a Scene,
+    settings: &'a IntegratorSettings,
+    lights: LightSampler<'a>,
+    guide: Option<&'a SdTree>,
+    /// Whether vertices take a light sample (`nee` or `mis`, and the scene has a light).
+    sample_lights: bool,
+}
+
+impl<'a> Path<'a> {
+    fn new(scene: &'a Scene, settings: &'a IntegratorSettings, guide: Option<&'a SdTree>) -> Self {
+        let lights = scene
+            .lights
+            .sampler(settings.light_points, settings.light_choice);
+        Path {
+            scene,
+            settings,
+            sample_lights: settings.lights != LightStrategy::Bsdf && lights.any(),
+            lights,
+            guide: guide.filter(|_| settings.directions == Directions::Guided),
+        }
+    }
+
+    /// The estimate of one path from `ray`: emission found by the path (weighted by
+    /// [`Self::emission_weight`]), a light sample at every vertex ([`Self::next_event`]), a
+    /// bounce ([`Self::sample_direction`]) and Russian roulette; `rec`, where there is one (a
+    /// training iteration), sees every guided bounce and the path's end.
+    #[inline(always)]
+    fn trace<S: Sampler>(
+        &self,
+        (mut origin, mut dir): (Vec3, Vec3),
+        sampler: &mut S,
+        rays: &mut RayCounts,
+        stack: &mut TraceStack,
+        mut rec: Option<&mut dyn PathRecorder>,
+    ) -> Vec3 {
+        let (scene, settings) = (self.scene, self.settings);
+        let mut l = Vec3::ZERO;
+        let mut beta = Vec3::ONE;
+        // None for the camera ray: what it sees counts fully in every mode
+        let mut prev: Option<Previous> = None;
+        for segment in 1..=settings.max_depth {
+            *if prev.is_none() {
+                &mut rays.camera
+            } else {
+                &mut rays.bounce
+            } += 1;
+            let Some(hit) = timed(settings.time_traces, rays, || {
+                scene.intersect(stack, origin, dir, f32::INFINITY)
+            }) else {
+                let w = self.emission_weight(prev, |v| self.lights.environment_pdf(v.n, dir));
+                l += beta * scene.environment().radiance(dir) * w;
+                break;
+            };
+            let s = scene.surface(&hit);
+            let m = scene.material_at(&s);
+            let wo = -dir;
+            let front = s.ng.dot(wo) > 0.0;
+            if front && m.is_emissive() {
+                let w = self.emission_weight(prev, |v| {
+                    let light = scene.lights.light_of(hit.prim);
+                    light.map_or(0.0, |i| self.lights.pdf(i, v.p, v.n, s.p))
+                });
+                l += beta * m.emission * w;
+            }
+            if segment == settings.max_depth {
+                break;
+            }
+            let bsdf = scene.bsdf_at(&s);
+            if bsdf.is_black() {
+                break;
+            }
+            // values this bounce cannot use are skipped, not drawn (the same image, fewer hashes)
+            let u = BounceSample::draw_needed(
+                sampler,
+                self.sample_lights,
+                bsdf.chooses_lobe(settings.directions),
+                segment >= RR_START_BOUNCE,
+                settings.directions == Directions::Guided,
+            );
+            let v = Vertex::new(scene, &s, front, wo);
+            let g = self.guide.map(|t| GuideAt::new(t, s.p));
+            let direct = self
+                .sample_lights
+                .then(|| self.next_event(&v, &bsdf, g.as_ref(), &u, beta, rays, stack));
+            if let Some(Some(d)) = direct {
+                l += d;
+            }
+            let Some((wi, bs, mix)) = self.sample_direction(&v, &bsdf, g.as_ref(), &u) else {
+                break;
+            };
+            if wi.dot(v.ng) <= 0.0 {
+                break; // below the geometric surface: no light passes through
+            }
+            beta *= bs.f * (bs.wi.z / bs.pdf);
+            if let (Some(g), Some(mix), Some(rec)) = (&g, &mix, rec.as_deref_mut()) {
+                rec.bounce(g, v.p, mix, &bs, beta, l);
+            }
+            if segment >= RR_START_BOUNCE {
+                // segment = the vertices so far after the camera
+                let q = survival(beta, g.as_ref().zip(mix.as_ref()));
+                if u.roulette >= q {
+                    break;
+                }
+                beta /= q;
+            }
+            prev = Some(Previous::left(&v, bs.pdf));
+            (origin, dir) = (v.spawn, wi);
+        }
+        if let Some(rec) = rec {
+            rec.finish(l);
+        }
+        l
+    }
+
+    /// The weight of emission a path reaches (a surface's, or the environment's where it
+    /// escapes), seen from the vertex `prev` it left (`None`: the camera): 1 for the camera ray
+    /// and under `bsdf`, 0 under `nee` (the light samples counted it), and under `mis`
+    /// `w(p_bsdf, p_light)` with `p_light(prev)` the pdf light sampling at `prev` gives it.
+    #[inline(always)]
+    fn emission_weight(
+        &self,
+        prev: Option<Previous>,
+        p_light: impl FnOnce(&Previous) -> f32,
+    ) -> f32 {
+        match (self.settings.lights, prev) {
+            (_, None) | (LightStrategy::Bsdf, _) => 1.0,
+            (LightStrategy::Nee, _) => 0.0,
+            (LightStrategy::Mis, Some(v)) => mis_weight(v.pdf, p_light(&v)),
+        }
+    }
+
+    /// The bounce's direction (world), its sample (local, with the pdf the estimator divides
+    /// by), and with a guide the [`Mixture`] it was drawn from; `None` ends the path (a failed
+    /// sample). With a guide: one-sample MIS of the guide (probability `α`) and the BSDF,
+    /// weighted by the mixture pdf `α·p_guide + (1 − α)·p_bsdf`.
+    #[inline(always)]
+    fn sample_direction(
+        &self,
+        v: &Vertex,
+        bsdf: &Bsdf,
+        g: Option<&GuideAt>,
+        u: &BounceSample,
+    ) -> Option<(Vec3, BsdfSample, Option<Mixture>)> {
+        let directions = self.settings.directions;
+        let Some(g) = g else {
+            let bs = bsdf.sample(v.wo_local, u.lobe, u.direction, directions)?;
+            return Some((v.frame.to_world(bs.wi), bs, None));
+        };
+        let (wi, c, wi_local, f, p_bsdf, p_guide) = if u.guide < g.alpha {
+            // the density comes from the descent that drew the point
+            let (c, p_c) = g.dtree.sample_canonical_pdf(u.guided_direction);
+            let wi = canonical_to_dir(c);
+            let wi_local = v.frame.to_local(wi);
+            if wi_local.z <= 0.0 {
+                return None; // a guided direction below the surface: a failed sample
+            }
+            let p_bsdf = bsdf.pdf(v.wo_local, wi_local, directions);
+            let f = bsdf.eval(v.wo_local, wi_local);
+            (wi, c, wi_local, f, p_bsdf, p_c * GuideAt::PER_STERADIAN)
+        } else {
+            let bs = bsdf.sample(v.wo_local, u.lobe, u.direction, directions)?;
+            let wi = v.frame.to_world(bs.wi);
+            let c = dir_to_canonical(wi);
+            (wi, c, bs.wi, bs.f, bs.pdf, g.guide_pdf_canonical(c))
+        };
+        let pdf = g.mixture(p_guide, p_bsdf) * self.settings.guide_pdf_scale;
+        if !(pdf > 0.0 && pdf.is_finite()) {
+            return None;
+        }
+        let bs = BsdfSample {
+            wi: wi_local,
+            f,
+            pdf,
+        };
+        let mix = Mixture {
+            point: c,
+            p_bsdf,
+            p_guide,
+        };
+        Some((wi, bs, Some(mix)))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn power_heuristic_weights_sum_to_one() {
+        for (a, b) in [(1.0f32, 1.0f32), (0.1, 10.0), (1e30, 1e-30), (3.0, 0.0)] {
+            let s = mis_weight(a, b) + mis_weight(b, a);
+            assert!((s - 1.0).abs() < 1e-6, "{a} {b}: {s}");
+        }
+        assert_eq!(mis_weight(0.0, 1.0), 0.0);
+        assert!((mis_weight(1.0, 1.0) - 0.5).abs() < 1e-7);
+        assert!((mis_weight(2.0, 1.0) - 0.8).abs() < 1e-7);
+    }
+}
