@@ -245,7 +245,7 @@ pub fn merge(inputs: &[MergeInput]) -> Result<(RgbImage, RenderMetadata)> {
                     .iter()
                     .map(|i| i.meta.estimate.as_ref().map_or(1, |e| e.replicates))
                     .sum(),
-                method: "merged".into(),
+                method: crate::output::EstimateMethod::Merged,
                 mse,
                 rel_mse,
             }

@@ -11,7 +11,7 @@ use crate::analysis::plots::write_error_map;
 use crate::analysis::report::{number, Column, Report, Table};
 use crate::error::{Error, Result};
 use crate::image_io::{check_image_path, check_writable, read_exr, RgbImage};
-use crate::output::RenderMetadata;
+use crate::output::{EstimateMethod, RenderMetadata};
 use glam::Vec3;
 use std::path::{Path, PathBuf};
 
@@ -121,9 +121,9 @@ pub fn run(req: &DiffRequest) -> Result<DiffOutcome> {
                 .ok()
                 .flatten()
                 .and_then(|m| m.estimate)
-                .map_or("replicates".into(), |e| match e.method.as_str() {
-                    "replicates" => format!("{} replicates", e.replicates),
-                    m => m.to_string(),
+                .map_or("replicates".into(), |e| match e.method {
+                    EstimateMethod::Replicates => format!("{} replicates", e.replicates),
+                    m => m.name().to_string(),
                 });
             (how, mse, rel)
         }),

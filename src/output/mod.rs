@@ -1,0 +1,158 @@
+//! A render's outputs: the typed metadata every EXR records ([`RenderMetadata`]), and writing
+//! the image (EXR with the variance channels, or PNG) plus an optional variance-only EXR.
+//!
+//! Metadata is stored as EXR string attributes `vrpt.KEY` (see [`crate::image_io`]);
+//! `output::keys` is the one place that knows the keys, each spelled once in [`KEYS`]. Reading
+//! is strict: a vrpt image must carry every required key with a well-formed value, and its recorded size must be its real size, so
+//! `merge`, `diff`, `compare` and `converge` never index pixels by a claimed size.
+
+mod keys;
+mod metadata;
+
+pub use keys::{Key, KEYS};
+pub use metadata::{EstimateMethod, EstimateRecord, GuideRecord, RenderMetadata};
+
+use crate::error::Result;
+use crate::estimate::ErrorEstimate;
+use crate::film::Film;
+use crate::image_io::{write_exr, write_png, Format, RgbImage};
+use std::path::Path;
+
+/// The image a render's film makes, as an EXR holds it: the mean, the variance of the mean, the
+/// samples in each pixel's mean, and the metadata.
+pub fn render_image(film: &Film, meta: &RenderMetadata) -> RgbImage {
+    RgbImage {
+        width: film.width,
+        height: film.height,
+        pixels: film.mean_image(),
+        variance: Some(film.variance_image()),
+        samples: Some(film.sample_counts()),
+        estimated_variance: None,
+        metadata: meta.to_attributes(),
+    }
+}
+
+/// Write a render: `output` as EXR (mean, variance of the mean, sample counts, the estimated
+/// variance of the mean when `estimate` is given, metadata) or PNG (tone-mapped with `exposure`
+/// stops); and, if asked, the variance of the mean alone to the EXR `variance`. Every file is
+/// written to a temporary file and renamed.
+pub fn write_render(
+    output: &Path,
+    (film, estimate): (&Film, Option<&ErrorEstimate>),
+    meta: &RenderMetadata,
+    exposure: f32,
+    variance: Option<&Path>,
+) -> Result<()> {
+    let image = RgbImage {
+        estimated_variance: estimate
+            .filter(|e| e.method != crate::estimate::Method::Undefined)
+            .map(|e| e.variance.clone()),
+        ..render_image(film, meta)
+    };
+    match Format::from_path(output)? {
+        Format::Exr => write_exr(output, &image)?,
+        Format::Png => write_png(output, film.width, film.height, &image.pixels, exposure)?,
+    }
+    if let Some(v) = variance {
+        let vmeta = RenderMetadata {
+            image: Some("variance of the mean".into()),
+            ..meta.clone()
+        };
+        let var = RgbImage {
+            pixels: image.variance.clone().expect("a render's variance"),
+            variance: None,
+            estimated_variance: None,
+            metadata: vmeta.to_attributes(),
+            ..image
+        };
+        write_exr(v, &var)?;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::strategy::Preset;
+
+    #[test]
+    fn attributes_round_trip_and_errors_name_the_key() {
+        let m = RenderMetadata {
+            scene: "scenes/x".into(),
+            scene_hash: 0xdead_beef_0123_4567,
+            width: 4,
+            height: 3,
+            spp: 64,
+            first_sample: 32,
+            seed: Some(9),
+            merged_seeds: Vec::new(),
+            strategy: Preset::Importance.strategy(),
+            max_depth: 5,
+            render_seconds: 1.5,
+            nonfinite_samples: 2,
+            pass_spp: Some(16),
+            time_limit_seconds: Some(0.5),
+            merged_from: None,
+            image: None,
+            shard: Some((2, 4)),
+            requested_spp: Some(128),
+            interrupted: true,
+            guide: Some(GuideRecord {
+                iterations: 5,
+                training_spp: 31,
+                training_seconds: 1.25,
+                final_seconds: 2.5,
+                leaves: 40,
+                quad_nodes: 3000,
+                bytes: 123456,
+            }),
+            estimate: Some(EstimateRecord {
+                replicates: 4,
+                method: EstimateMethod::Replicates,
+                mse: 1.5e-4,
+                rel_mse: 2.25e-3,
+            }),
+            adaptive_rounds: Some(6),
+            target_error: Some(1e-3),
+        };
+        let a = m.to_attributes();
+        assert_eq!(a["strategy"], "importance");
+        assert_eq!(RenderMetadata::from_attributes(&a).unwrap(), m);
+        let merged = RenderMetadata {
+            seed: None,
+            merged_seeds: vec![3, 9, 12],
+            ..m.clone()
+        };
+        assert_eq!(merged.seeds(), [3, 9, 12]);
+        assert_eq!(m.seeds(), [9]);
+        assert_eq!(
+            RenderMetadata::from_attributes(&merged.to_attributes()).unwrap(),
+            merged
+        );
+        let mut bad = a.clone();
+        bad.insert("spp".into(), "many".into());
+        assert!(RenderMetadata::from_attributes(&bad)
+            .unwrap_err()
+            .contains("'spp'"));
+        bad = a.clone();
+        bad.remove("max_depth");
+        assert!(RenderMetadata::from_attributes(&bad)
+            .unwrap_err()
+            .contains("'max_depth'"));
+        bad = a.clone();
+        bad.insert("sampler".into(), "nosuch".into());
+        assert!(RenderMetadata::from_attributes(&bad)
+            .unwrap_err()
+            .contains("sampler"));
+        // a recorded size that is not the image's is refused
+        let img = RgbImage {
+            width: 2,
+            height: 3,
+            pixels: vec![glam::Vec3::ZERO; 6],
+            metadata: a,
+            ..RgbImage::default()
+        };
+        let e = RenderMetadata::from_image(&img, Path::new("x.exr")).unwrap_err();
+        assert!(e.to_string().contains("4×3"), "{e}");
+    }
+}
