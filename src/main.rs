@@ -46,10 +46,22 @@ fn main() -> ExitCode {
                     ExitCode::SUCCESS
                 };
             }
-            // clap's message, first line only: "error: invalid value 'x' for '--spp <SPP>': ..."
+            // clap's message, its first paragraph on one line: "error: invalid value 'x' for
+            // '--spp <SPP>': ...", or "error: the following required arguments were not
+            // provided: --adaptive" (the names clap lists on the lines below)
             let text = e.render().to_string();
-            let line = text.lines().next().unwrap_or("error: bad arguments");
-            eprintln!("{}", vrpt::error::clip_line(line));
+            let line = text
+                .lines()
+                .take_while(|l| !l.trim().is_empty() && !l.starts_with("Usage:"))
+                .map(str::trim)
+                .collect::<Vec<_>>()
+                .join(" ");
+            let line = if line.is_empty() {
+                "error: bad arguments".to_string()
+            } else {
+                line
+            };
+            eprintln!("{}", vrpt::error::clip_line(&line));
             return ExitCode::from(2);
         }
     };

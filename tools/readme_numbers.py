@@ -1,11 +1,12 @@
 #!/usr/bin/env python3
-"""Measure every table the README shows, in one run on one machine, and print them as markdown.
+"""Measure every table the README's chapters (docs/*.md) show, in one run on one machine, and print
+them as markdown.
 
     python3 tools/readme_numbers.py                 # every section (about 25 minutes on 2 cores)
     python3 tools/readme_numbers.py --only speed,error
     python3 tools/readme_numbers.py --list
 
-Each section prints a heading, the commands behind it, and its table(s); the README's numbers are
+Each section prints a heading, the commands behind it, and its table(s); the chapters' numbers are
 pasted from one run of this script, and the first section names the machine. Timings are medians
 of interleaved runs (A B A B ...), because the machines here are shared and drift by 30 % within
 minutes. The race against Mitsuba needs `pip install -r tools/peers/requirements.txt`; without
@@ -381,7 +382,8 @@ def equal_time_pairs(scene, w, h, seconds, configs, pairs=((1, 2), (3, 4))):
             imgs, spps, err = [], [], ""
             for seed in pair:
                 img = WORK / f"pair-{seed}.exr"
-                r = vrpt("render", f"scenes/{scene}", "--width", w, "--height", h, "--spp", 1 << 20, "--time-limit",
+                size = ["--width", w, "--height", h] if w else []  # no size: the scene's own
+                r = vrpt("render", f"scenes/{scene}", *size, "--spp", 1 << 20, "--time-limit",
                          seconds, "--seed", seed, "--stats", *flags, "-o", img)
                 spps.append(int(re.search(r"at (\d+) spp", r.stderr).group(1)))
                 imgs.append(img)
@@ -424,32 +426,40 @@ def guiding():
         print(f"\nThe gap's guided render at 60 s (`--stats`): {last}")
 
 
-# (scene, width, height, seconds, target ratio): issue 38's equal-time targets
-ADAPTIVE_TARGETS = [("glossy-plates", 256, 192, 3, 1.2), ("glossy-plates", 256, 192, 10, 2.0),
-                    ("glossy-plates", 256, 192, 60, 2.0), ("lit-checker", 128, 96, 30, 2.0),
-                    ("cornell-box", 64, 64, 10, 0.95), ("textured", 128, 96, 10, 0.95)]
+# (scene, width, height, seconds, target ratio): issue 38's equal-time targets; a size of None
+# is the scene's own (scene.toml), as a user renders it; every shipped scene at 10 s
+SHIPPED = ["cornell-box", "glossy-plates", "lit-checker", "checker-plane", "night-hall", "door", "door-dark",
+           "gap", "sun-sky", "textured"]
+ADAPTIVE_TARGETS = ([("glossy-plates", None, None, 3, 1.2), ("glossy-plates", None, None, 60, 2.0),
+                     ("lit-checker", None, None, 30, 2.0)]
+                    + [(s, None, None, 10, 2.0 if s == "glossy-plates" else 0.95) for s in SHIPPED])
 
 
 @section("adaptive")
 def adaptive():
     """Adaptive sampling against uniform at equal time as a user renders (`--time-limit`), relMSE
     from pairs of independent renders, and `--target-error` with and without `--adaptive`."""
-    print("`vrpt render SCENE --width W --height H --time-limit T --seed S [--adaptive]` for seeds 1–4, uniform and "
+    print("`vrpt render SCENE --time-limit T --seed S [--adaptive]` (each scene at its own size) for seeds 1–4, uniform and "
           "adaptive interleaved; a render's relMSE (eps 0.01) is half the relMSE of seed 1 against seed 2 "
           "(and 3 against 4): two independent unbiased renders differ by twice the variance of one, so no "
-          "reference's noise sits under the error; ratio = uniform relMSE / adaptive relMSE; the bounds at "
-          "equal spp are what the adaptive render prints (ideal `mean(e²)/mean(e)²`, and its schedule's):\n")
+          "reference's noise sits under the error; ratio = uniform relMSE / adaptive relMSE; the gains at "
+          "equal spp are what the adaptive render prints (the ideal `mean(e²)/mean(e)²`, its schedule's bound, "
+          "and the cross-validated gain of a round allocated from estimates as noisy as its own), or the "
+          "cross-validated gain after the first round that made it finish uniformly:\n")
     rows = []
     for scene, w, h, secs, target in ADAPTIVE_TARGETS:
         r = equal_time_pairs(scene, w, h, secs, [("uniform", []), ("adaptive", ["--adaptive"])])
         (mu, su, _), (ma, sa, err) = r["uniform"], r["adaptive"]
         ratio = mu / ma
-        b = re.search(r"ideal \(n ∝ e\) ([0-9.]+), this schedule .*?\) ([0-9.]+)", err)
-        bound = f"{b.group(1)} / {b.group(2)}" if b else "?"
-        rows.append([f"{scene} {w}×{h}", f"{secs} s", f"{g(mu)} ({su} spp)", f"{g(ma)} ({sa} spp)",
+        b = re.search(r"ideal \(n ∝ e\) ([0-9.]+), this schedule .*?\) ([0-9.]+); .*cross-validated ([0-9.]+)", err)
+        f = re.search(r"cross-validated gain of allocating was ([0-9.]+)", err)
+        bound = (f"{b.group(1)} / {b.group(2)} / {b.group(3)}" if b
+                 else f"uniform after round 1 ({f.group(1)})" if f else "?")
+        size = f"{w}×{h}" if w else "(own size)"
+        rows.append([f"{scene} {size}", f"{secs} s", f"{g(mu)} ({su} spp)", f"{g(ma)} ({sa} spp)",
                      f"**{ratio:.2f}×**", bound, f"≥ {target}×", "met" if ratio >= target else "not met"])
     print(table(["scene", "time", "uniform relMSE", "adaptive relMSE", "uniform / adaptive",
-                 "bound: ideal / schedule", "target", ""], rows))
+                 "ideal / schedule / cross-validated", "target", ""], rows))
     print("\n`vrpt render scenes/glossy-plates --target-error 2e-4 --seed S [--adaptive]`, seeds 1–2 interleaved, "
           "seconds to stop (median):\n")
     t = {"uniform": [], "adaptive": []}

@@ -65,6 +65,11 @@ pub struct ErrorArgs {
     /// image weighing each round by its planned size (unbiased); needs R ≥ 2.
     #[arg(long, conflicts_with = "shard")]
     pub adaptive: bool,
+    /// With --adaptive: allocate a round by relative error only where the gain of doing so,
+    /// cross-validated on the rounds before, is at least G; below it after the first round the
+    /// render finishes as uniform passes of one set of points (0: always allocate) [default: 1.2]
+    #[arg(long, value_name = "G", requires = "adaptive", value_parser = parse_gain, allow_negative_numbers = true)]
+    pub min_allocation_gain: Option<f64>,
     /// Stop after the first round whose estimated relMSE of the image is at most E (or at
     /// --spp or --time-limit, whichever comes first; without --spp the cap is 65536 spp).
     #[arg(long, value_name = "E", value_parser = crate::limits::parse_target)]
@@ -72,6 +77,14 @@ pub struct ErrorArgs {
     /// Also write the samples of each pixel as a false-colour PNG with its colour bar.
     #[arg(long, value_name = "PNG")]
     pub spp_map: Option<PathBuf>,
+}
+
+/// A gain: a finite number ≥ 0.
+fn parse_gain(s: &str) -> std::result::Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(x) if x >= 0.0 && x.is_finite() => Ok(x),
+        _ => Err(format!("'{s}' is not a gain (a finite number ≥ 0)")),
+    }
 }
 
 /// The cap on spp of a `--target-error` render without `--spp`.
@@ -209,6 +222,7 @@ impl RenderRequest {
             shard: self.shard,
             stop: self.stop,
             adaptive: self.error.adaptive,
+            min_allocation_gain: self.error.min_allocation_gain,
             target_error: self.error.target_error,
         };
         let samples = match self.shard {
@@ -291,19 +305,38 @@ impl PreparedRender {
         }
         let adaptive = match r.rounds {
             Some(n) => format!(
-                "adaptive: {n} rounds, {} to {} samples per pixel\n",
+                "adaptive: {n} rounds{}, {} to {} samples per pixel\n",
+                match r.uniform_rounds {
+                    0 => String::new(),
+                    u =>
+                        format!(
+                        " ({u} of them uniform: the cross-validated gain of allocating from the \
+                         rounds before was below {})",
+                        self.plan.min_allocation_gain.unwrap_or(crate::estimate::ALLOCATE_ABOVE)
+                    ),
+                },
                 r.film.sample_counts().iter().min().copied().unwrap_or(0),
                 r.film.sample_counts().iter().max().copied().unwrap_or(0)
             ),
             None => String::new(),
-        } + &r.allocation.map_or(String::new(), |g| {
+        } + &r.finished_uniformly.map_or(String::new(), |gain| {
+            format!(
+                "adaptive: after the first round the cross-validated gain of allocating was \
+                 {gain:.2}, below {}: the rest rendered as uniform passes of one set of points\n",
+                self.plan
+                    .min_allocation_gain
+                    .unwrap_or(crate::estimate::ALLOCATE_ABOVE)
+            )
+        }) + &r.allocation.map_or(String::new(), |g| {
             format!(
                 "adaptive: relMSE gain over uniform at equal spp, bounds from this image: ideal \
-                 (n ∝ e) {:.2}, this schedule (first round {:.0}%, uniform share {:.0}%) {:.2}\n",
+                 (n ∝ e) {:.2}, this schedule (first round {:.0}%, uniform share {:.0}%) {:.2}; \
+                 a round allocated from estimates this noisy, cross-validated {:.2}\n",
                 g.ideal,
                 100.0 * g.first_share,
                 100.0 * crate::estimate::UNIFORM_SHARE,
-                g.schedule
+                g.schedule,
+                g.cross_validated
             )
         });
         Ok(RenderOutcome {

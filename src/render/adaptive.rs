@@ -36,6 +36,7 @@ impl<F: SamplerFactory> Job<'_, F> {
         let mut first_planned = 0u64;
         let mut planned = 0u64; // spp per replicate planned so far
         let mut rounds = 0u32;
+        let mut uniform_rounds = 0u32; // rounds after the first that gave every pixel the same
         let mut interrupted = false;
         let mut last_size = first_round;
         let mut rate = 0.0f64; // path samples per second, from the last round
@@ -76,8 +77,18 @@ impl<F: SamplerFactory> Job<'_, F> {
             } else {
                 let e = ErrorEstimate::of(&replicates, &raw);
                 let mean = raw.mean_image();
-                let n: Vec<u64> = (0..raw.len()).map(|i| raw.count(i)).collect();
-                estimate::allocate(w, h, &mean, &e.variance, &n, size as u32)
+                let samples = effective_samples(&spread, planned);
+                let gain = estimate::cross_validated_gain(w, &mean, &e.variance, &samples);
+                if gain >= plan.min_allocation_gain.unwrap_or(estimate::ALLOCATE_ABOVE) {
+                    let n: Vec<u64> = (0..raw.len()).map(|i| raw.count(i)).collect();
+                    estimate::allocate(w, h, &mean, &e.variance, &n, size as u32)
+                } else if rounds == 1 && plan.target_error.is_none() {
+                    // the first round's samples are every pixel's first planned·R: uniform
+                    return self.finish_uniformly(raw, first + planned, planned * r64, gain, stats);
+                } else {
+                    uniform_rounds += 1;
+                    vec![size as u32; raw.len()]
+                }
             };
             // keep every pixel's sample indices below 2³²
             let counts: Vec<u32> = counts
@@ -154,13 +165,11 @@ impl<F: SamplerFactory> Job<'_, F> {
         }
         let film = weighted(&raw, &replicates);
         let estimate = ErrorEstimate::of(&replicates, &film);
-        let b2 = (planned * planned) as f64;
-        let samples: Vec<f64> = spread.iter().map(|&q| b2 / q.max(1e-300)).collect();
         let gains = crate::estimate::allocation_gains(
             w,
             &film.mean_image(),
             &estimate.variance,
-            &samples,
+            &effective_samples(&spread, planned),
             first_planned as f64 / planned.max(1) as f64,
         );
         Ok(Rendered {
@@ -171,9 +180,65 @@ impl<F: SamplerFactory> Job<'_, F> {
             interrupted,
             estimate,
             rounds: Some(rounds),
+            uniform_rounds,
+            finished_uniformly: None,
             allocation: Some(gains),
         })
     }
+
+    /// The rest of an adaptive render whose first round said allocating cannot pay (its
+    /// cross-validated `gain` below [`estimate::ALLOCATE_ABOVE`]): uniform passes of one set of
+    /// points from sample index `next` on (the first round's replicates used the indices before
+    /// it), growing under a time limit as a render without `--adaptive` does, merged with the
+    /// first round's `pilot_spp` samples per pixel. Every pixel holds the same samples, so the
+    /// image is their plain mean; its error is the per-sample estimate of one set.
+    fn finish_uniformly(
+        &self,
+        pilot: Film,
+        next: u64,
+        pilot_spp: u64,
+        gain: f64,
+        stats: &mut RenderStats,
+    ) -> Result<Rendered> {
+        let settings = RenderSettings {
+            replicates: 1,
+            first_sample: next as u32,
+            spp: (self.settings.spp as u64 - pilot_spp).max(1) as u32,
+            ..self.settings.clone()
+        };
+        let plan = PassPlan {
+            adaptive: false,
+            ..*self.plan
+        };
+        let job = Job {
+            settings: &settings,
+            plan: &plan,
+            ..*self
+        };
+        let rest = job.uniform(stats)?;
+        let mut film = pilot;
+        film.merge(&rest.film).map_err(Error::Settings)?;
+        let estimate = ErrorEstimate::of(&Replicates::new(1, film.len()), &film);
+        Ok(Rendered {
+            film,
+            stats: RenderStats::default(),
+            first_sample: self.settings.first_sample,
+            spp: (pilot_spp + rest.spp as u64).min(u32::MAX as u64) as u32,
+            interrupted: rest.interrupted,
+            estimate,
+            rounds: Some(1),
+            uniform_rounds: 0,
+            finished_uniformly: Some(gain),
+            allocation: None,
+        })
+    }
+}
+
+/// Each pixel's effective sample count after rounds of `planned` spp in all: `B²/Σ_j b_j²/n_j(i)`
+/// from `spread` = `Σ_j b_j²/n_j(i)` (`B` for a pixel that took every round's planned size).
+fn effective_samples(spread: &[f64], planned: u64) -> Vec<f64> {
+    let b2 = (planned * planned) as f64;
+    spread.iter().map(|&q| b2 / q.max(1e-300)).collect()
 }
 
 /// `raw`'s samples with each pixel's sum rescaled to `F·n`, `F` the replicates' weighted mean:

@@ -247,6 +247,24 @@ pub fn sobol(seed: u64, _: SamplePass) -> SobolSampler {
     SobolSampler::new(seed)
 }
 
+/// Work done with whichever built-in sampler a render names: [`with_sampler`] is the one
+/// `match` on [`SamplerKind`], so a new sampler is one arm there (renders and guide training
+/// both go through it).
+pub(crate) trait WithSampler {
+    type Out;
+    /// Do the work with the samplers `factory` makes.
+    fn run<F: SamplerFactory>(self, factory: &F) -> Self::Out;
+}
+
+/// `work` run with the factory of the built-in sampler `kind`.
+pub(crate) fn with_sampler<W: WithSampler>(kind: SamplerKind, work: W) -> W::Out {
+    match kind {
+        SamplerKind::Independent => work.run(&independent),
+        SamplerKind::Stratified => work.run(&stratified),
+        SamplerKind::Sobol => work.run(&sobol),
+    }
+}
+
 /// The guide a render samples with, and whether it records for the next one.
 #[derive(Clone, Copy)]
 struct Guide<'a> {
@@ -270,6 +288,11 @@ pub struct PassPlan {
     /// Adaptive sampling: rounds whose samples go where the estimated relative error is
     /// ([`crate::estimate`]); needs at least 2 replicates, and no shard.
     pub adaptive: bool,
+    /// Adaptive rounds allocate only where the cross-validated gain of allocating is at least
+    /// this ([`crate::estimate::cross_validated_gain`]); `None`:
+    /// [`crate::estimate::ALLOCATE_ABOVE`]. 0 allocates every round whatever the gain; infinity
+    /// never does (the render finishes as uniform passes after its first round).
+    pub min_allocation_gain: Option<f64>,
     /// Stop after the first pass (a whole round of the replicates) after which the image's
     /// estimated relMSE is at most this.
     pub target_error: Option<f64>,
@@ -314,6 +337,12 @@ pub struct Rendered {
     pub estimate: ErrorEstimate,
     /// The rounds of an adaptive render (`None`: every pixel took the same samples).
     pub rounds: Option<u32>,
+    /// Of an adaptive render's rounds after the first, those that gave every pixel the same
+    /// samples because allocating could not pay ([`crate::estimate::ALLOCATE_ABOVE`]).
+    pub uniform_rounds: u32,
+    /// An adaptive render that finished as uniform passes after its first round: the
+    /// cross-validated gain of allocating that said it could not pay.
+    pub finished_uniformly: Option<f64>,
     /// An adaptive render's bounds on its relMSE gain over uniform sampling, from its own
     /// estimates ([`crate::estimate::allocation_gains`]).
     pub allocation: Option<crate::estimate::AllocationGains>,
@@ -348,13 +377,22 @@ pub fn render_passes(
     plan: &PassPlan,
     progress: &dyn Progress,
 ) -> Result<Rendered> {
-    match settings.strategy.sampler {
-        SamplerKind::Independent => {
-            render_passes_with(scene, settings, plan, &independent, progress)
+    struct Passes<'a>(
+        &'a Scene,
+        &'a RenderSettings,
+        &'a PassPlan,
+        &'a dyn Progress,
+    );
+    impl WithSampler for Passes<'_> {
+        type Out = Result<Rendered>;
+        fn run<F: SamplerFactory>(self, factory: &F) -> Self::Out {
+            render_passes_with(self.0, self.1, self.2, factory, self.3)
         }
-        SamplerKind::Stratified => render_passes_with(scene, settings, plan, &stratified, progress),
-        SamplerKind::Sobol => render_passes_with(scene, settings, plan, &sobol, progress),
     }
+    with_sampler(
+        settings.strategy.sampler,
+        Passes(scene, settings, plan, progress),
+    )
 }
 
 /// [`render_passes`] with the samplers `factory` makes, whatever `settings.strategy.sampler`

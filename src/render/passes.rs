@@ -137,6 +137,8 @@ impl<F: SamplerFactory> Job<'_, F> {
             interrupted,
             estimate,
             rounds: None,
+            uniform_rounds: 0,
+            finished_uniformly: None,
             allocation: None,
         })
     }

@@ -150,12 +150,19 @@ pub fn learn_guide(scene: &Scene, settings: &RenderSettings) -> Result<(SdTree, 
     with_threads(settings.threads, || {
         let mut stats = RenderStats::default();
         let start = Instant::now();
+        struct Train<'a>(
+            (&'a Scene, &'a Camera, &'a RenderSettings, &'a PassPlan),
+            Instant,
+            &'a mut RenderStats,
+        );
+        impl WithSampler for Train<'_> {
+            type Out = SdTree;
+            fn run<F: SamplerFactory>(self, factory: &F) -> SdTree {
+                train_guide(self.0, factory, self.1, self.2)
+            }
+        }
         let c = (scene, &camera, settings, &plan);
-        let tree = match settings.strategy.sampler {
-            SamplerKind::Independent => train_guide(c, &independent, start, &mut stats),
-            SamplerKind::Stratified => train_guide(c, &stratified, start, &mut stats),
-            SamplerKind::Sobol => train_guide(c, &sobol, start, &mut stats),
-        };
+        let tree = with_sampler(settings.strategy.sampler, Train(c, start, &mut stats));
         stats.elapsed = start.elapsed();
         (tree, stats)
     })

@@ -240,7 +240,11 @@ fn compare_and_converge_measure_adaptive_beside_uniform() {
     let entries = || {
         vec![
             Entry::builtin(st).with_replicates(4),
-            Entry::builtin(st).with_replicates(4).adaptive(),
+            // every round allocated: the plumbing of adaptive entries is what is tested
+            Entry::builtin(st)
+                .with_replicates(4)
+                .adaptive()
+                .with_min_allocation_gain(0.0),
         ]
     };
     let s = common::experiment_settings(w, h, d, 4);

@@ -163,6 +163,7 @@ pub fn compare_entries(
                     pass_spp: equal_time.map(|_| spp),
                     time_limit: equal_time,
                     adaptive: st.adaptive,
+                    min_allocation_gain: st.min_allocation_gain,
                     ..PassPlan::default()
                 };
                 let r = (st.render)(scene, &settings, &plan)?;

@@ -95,6 +95,7 @@ pub fn converge_entries(
                     let settings = run_settings(st, s, spp, seed);
                     let plan = PassPlan {
                         adaptive: st.adaptive,
+                        min_allocation_gain: st.min_allocation_gain,
                         ..PassPlan::default()
                     };
                     let r = (st.render)(scene, &settings, &plan)?;

@@ -57,6 +57,9 @@ pub struct Entry<'a> {
     pub replicates: u32,
     /// Adaptive sampling ([`PassPlan::adaptive`]), set by [`Entry::adaptive`].
     pub adaptive: bool,
+    /// Its rounds' bar ([`PassPlan::min_allocation_gain`]; `None`: the render's default), set
+    /// by [`Entry::with_min_allocation_gain`].
+    pub min_allocation_gain: Option<f64>,
     render: Box<EntryRender<'a>>,
 }
 
@@ -68,6 +71,7 @@ impl Entry<'static> {
             strategy,
             replicates: 1,
             adaptive: false,
+            min_allocation_gain: None,
             render: Box::new(|scene, settings, plan| {
                 render_passes(scene, settings, plan, &NoProgress)
             }),
@@ -84,6 +88,7 @@ impl<'a> Entry<'a> {
             strategy,
             replicates: 1,
             adaptive: false,
+            min_allocation_gain: None,
             render: Box::new(move |scene, settings, plan| {
                 render_passes_with(scene, settings, plan, &factory, &NoProgress)
             }),
@@ -105,6 +110,13 @@ impl Entry<'_> {
         self.adaptive = true;
         self
     }
+
+    /// Adaptive rounds allocate only where the cross-validated gain is at least `g` (0: every
+    /// round, whatever the gain).
+    pub fn with_min_allocation_gain(mut self, g: f64) -> Self {
+        self.min_allocation_gain = Some(g);
+        self
+    }
 }
 
 impl std::fmt::Debug for Entry<'_> {
@@ -114,6 +126,7 @@ impl std::fmt::Debug for Entry<'_> {
             .field("strategy", &self.strategy)
             .field("replicates", &self.replicates)
             .field("adaptive", &self.adaptive)
+            .field("min_allocation_gain", &self.min_allocation_gain)
             .finish_non_exhaustive()
     }
 }
