@@ -3,6 +3,7 @@
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
 use vrpt::analysis::experiments::ExperimentSettings;
 use vrpt::film::Film;
 use vrpt::image_io::RgbImage;
@@ -85,4 +86,58 @@ pub fn experiment_settings(w: u32, h: u32, max_depth: u32, runs: u32) -> Experim
         threads: None,
         regions: Vec::new(),
     }
+}
+
+/// Run the `vrpt` binary with `args`.
+pub fn vrpt(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_vrpt"))
+        .args(args)
+        .output()
+        .expect("run vrpt")
+}
+
+/// `out`, after asserting it succeeded (its stderr otherwise).
+pub fn ok(out: Output) -> Output {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+/// Run `vrpt` with `args` and assert it succeeded.
+pub fn vrpt_ok(args: &[&str]) -> Output {
+    let o = vrpt(args);
+    assert!(
+        o.status.success(),
+        "vrpt {}: {}",
+        args.join(" "),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    o
+}
+
+/// One error line holding every string of `expect`, a non-zero exit, no panic.
+pub fn assert_refused(out: &Output, what: &str, expect: &[&str]) {
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{what}: should fail");
+    assert!(!stderr.contains("panicked"), "{what}: panicked: {stderr}");
+    let lines: Vec<&str> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
+    assert_eq!(lines.len(), 1, "{what}: one line expected, got: {stderr}");
+    for e in expect {
+        assert!(lines[0].contains(e), "{what}: '{}' lacks '{e}'", lines[0]);
+    }
+}
+
+/// [`assert_refused`] with one expected string.
+pub fn assert_one_line_error(out: &Output, what: &str, expect: &str) {
+    assert_refused(out, what, &[expect]);
+}
+
+/// Independent uniform points of the unit square from `seed`.
+pub fn uniform_pairs(seed: u64) -> impl FnMut() -> glam::Vec2 {
+    use rand::{rngs::SmallRng, Rng, SeedableRng};
+    let mut rng = SmallRng::seed_from_u64(seed);
+    move || glam::Vec2::new(rng.random(), rng.random())
 }

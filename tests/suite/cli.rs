@@ -2,29 +2,9 @@
 //! line with a non-zero exit (never a panic) for each kind of bad input.
 
 use crate::common;
+use common::{assert_one_line_error, vrpt};
 
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn vrpt(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_vrpt"))
-        .args(args)
-        .output()
-        .expect("run vrpt")
-}
-
-fn assert_one_line_error(out: &Output, what: &str, expect: &str) {
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(!out.status.success(), "{what}: should fail");
-    assert!(!stderr.contains("panicked"), "{what}: panicked: {stderr}");
-    let lines: Vec<&str> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
-    assert_eq!(lines.len(), 1, "{what}: one line expected, got: {stderr}");
-    assert!(
-        lines[0].contains(expect),
-        "{what}: '{}' lacks '{expect}'",
-        lines[0]
-    );
-}
 
 #[test]
 fn renders_the_cornell_box_to_png_and_exr() {
@@ -575,6 +555,8 @@ fn renders_state_their_error_and_adapt_on_request() {
         "--spp",
         "64",
         "--adaptive",
+        "--min-allocation-gain",
+        "0",
         "--spp-map",
         map.to_str().unwrap(),
         "-o",
@@ -609,7 +591,7 @@ fn renders_state_their_error_and_adapt_on_request() {
     let meta = vrpt::output::RenderMetadata::require(&img, &exr).unwrap();
     assert!(img.metadata.contains_key("estimated_rel_mse"));
     let e = meta.estimate.expect("an estimate");
-    assert_eq!((e.replicates, e.method.as_str()), (4, "replicates"));
+    assert_eq!((e.replicates, e.method.name()), (4, "replicates"));
     assert!(meta.adaptive_rounds.is_some_and(|n| n >= 3));
     assert!(img.estimated_variance.is_some());
     let counts = img.samples.unwrap();
@@ -875,7 +857,7 @@ fn one_sample_claims_no_error_and_replicates_need_their_samples() {
         .unwrap()
         .estimate
         .unwrap();
-    assert_eq!(e.method, "undefined");
+    assert_eq!(e.method.name(), "undefined");
     assert!(e.rel_mse.is_nan() && img.estimated_variance.is_none());
     for extra in [
         vec!["--adaptive", "--spp", "5", "--replicates", "256"],
@@ -933,6 +915,59 @@ fn adaptive_rounds_stop_at_the_last_sample_index() {
     assert!(
         counts.iter().all(|&n| n as u64 <= 2 * 4096),
         "no index past the last"
+    );
+}
+
+/// `--min-allocation-gain`: a render whose first round says allocating cannot pay (here the
+/// bar is set out of reach) says so and finishes as uniform passes of one set: every pixel the
+/// requested spp, the per-sample estimate, one adaptive round in the metadata. The flag needs
+/// `--adaptive` and a finite gain ≥ 0, each refused in one line.
+#[test]
+fn adaptive_renders_finish_uniformly_where_allocating_cannot_pay() {
+    let dir = tempfile::tempdir().unwrap();
+    let exr = dir.path().join("u.exr");
+    let scene = common::cornell_path();
+    let s = scene.to_str().unwrap();
+    let args = [
+        "render",
+        s,
+        "--width",
+        "24",
+        "--height",
+        "24",
+        "--spp",
+        "64",
+        "--adaptive",
+    ];
+    let out = vrpt(
+        &[
+            &args[..],
+            &["--min-allocation-gain", "1e9", "-o", exr.to_str().unwrap()],
+        ]
+        .concat(),
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(err.contains("the rest rendered as uniform passes"), "{err}");
+    assert!(err.contains("per sample"), "{err}");
+    let img = vrpt::image_io::read_exr(&exr).unwrap();
+    let meta = vrpt::output::RenderMetadata::require(&img, &exr).unwrap();
+    assert_eq!((meta.spp, meta.adaptive_rounds), (64, Some(1)));
+    assert!(img.samples.unwrap().iter().all(|&n| n == 64));
+    assert_one_line_error(
+        &vrpt(&[&args[..], &["--min-allocation-gain", "-1"]].concat()),
+        "negative gain",
+        "not a gain",
+    );
+    assert_one_line_error(
+        &vrpt(&[&args[..], &["--min-allocation-gain", "inf"]].concat()),
+        "infinite gain",
+        "not a gain",
+    );
+    assert_one_line_error(
+        &vrpt(&["render", s, "--min-allocation-gain", "1"]),
+        "gain without --adaptive",
+        "--adaptive",
     );
 }
 

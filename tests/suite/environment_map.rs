@@ -24,11 +24,6 @@ use vrpt::strategy::Strategy;
 /// harness.
 const CHI2_TESTS: usize = 3;
 
-fn points(seed: u64) -> impl FnMut() -> Vec2 {
-    let mut rng = SmallRng::seed_from_u64(common::seed(seed));
-    move || Vec2::new(rng.random(), rng.random())
-}
-
 /// The map's samples binned by texel against the mass its pdf gives each texel, `∫ pdf dω`
 /// over the texel by a 6×6 midpoint rule in (cos θ, φ) — a different parametrization from
 /// the sampler's (u, v), so a wrong sin θ in the pdf's conversion to solid angle shows. Returns
@@ -43,7 +38,7 @@ fn texel_chi2(m: &EnvMap, n: usize, seed: u64) -> (f64, f64) {
         y * w + x
     };
     let mut observed = vec![0.0f64; w * h + 1];
-    let mut u = points(seed);
+    let mut u = common::uniform_pairs(common::seed(seed));
     for _ in 0..n {
         match m.sample(u()) {
             Some((d, _, _)) => observed[texel(d)] += 1.0,
@@ -137,7 +132,7 @@ fn map_sampling_fits_its_pdf_in_the_direction_harness() {
     let r = chi2_directions(
         |u| m.sample(u).map(|s| s.0),
         |d| m.pdf(d),
-        points(3),
+        common::uniform_pairs(common::seed(3)),
         400_000,
         &b,
     );

@@ -4,29 +4,11 @@
 //! content. Each gives one error line and a non-zero exit, never a panic or an image.
 
 use crate::common;
+use common::{assert_refused, vrpt};
 
 use glam::Vec3;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn vrpt(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_vrpt"))
-        .args(args)
-        .output()
-        .expect("run vrpt")
-}
-
-/// One error line holding every string of `expect`, a non-zero exit, no panic.
-fn assert_refused(out: &Output, what: &str, expect: &[&str]) {
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(!out.status.success(), "{what}: should fail");
-    assert!(!stderr.contains("panicked"), "{what}: panicked: {stderr}");
-    let lines: Vec<&str> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
-    assert_eq!(lines.len(), 1, "{what}: one line expected, got: {stderr}");
-    for e in expect {
-        assert!(lines[0].contains(e), "{what}: '{}' lacks '{e}'", lines[0]);
-    }
-}
+use std::process::Output;
 
 const MTL: &str = "newmtl white\nKd 0.7 0.7 0.7\nnewmtl light\nKd 0 0 0\nKe 10 10 10\n";
 const OBJ: &str = "mtllib s.mtl\nv -1 0 -1\nv 1 0 -1\nv 1 0 1\nv -1 0 1\nvt 0 0\nvt 1 0\n\

@@ -16,12 +16,13 @@
 
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Command;
 use vrpt::analysis::metrics::metrics;
 use vrpt::analysis::report::decode_halves;
 use vrpt::image_io::{read_exr, RgbImage};
 
 use crate::common;
+use common::vrpt_ok;
 
 /// Chromium, chromedriver and node, or None (with the reason) when one is missing.
 fn browser() -> Option<()> {
@@ -53,20 +54,6 @@ fn browser() -> Option<()> {
     }
     eprintln!("SKIPPED {why}");
     None
-}
-
-fn vrpt(args: &[&str]) -> Output {
-    let o = Command::new(env!("CARGO_BIN_EXE_vrpt"))
-        .args(args)
-        .output()
-        .unwrap();
-    assert!(
-        o.status.success(),
-        "vrpt {}: {}",
-        args.join(" "),
-        String::from_utf8_lossy(&o.stderr)
-    );
-    o
 }
 
 /// The report's JSON payload.
@@ -178,7 +165,7 @@ fn check_in_browser(report: &Path, expect: &Value, kind: &str) {
 fn render(spp: u32, seed: u64, strategy: &str, out: &Path) -> RgbImage {
     let scene = common::cornell_path();
     let (spp, seed) = (spp.to_string(), seed.to_string());
-    vrpt(&[
+    vrpt_ok(&[
         "render",
         scene.to_str().unwrap(),
         "--width",
@@ -244,7 +231,7 @@ fn compare_report_in_a_browser() {
     let (r, scene, ref_image) = reference(dir.path());
     let s = |p: &Path| p.to_str().unwrap().to_string();
     let (report, results) = (dir.path().join("compare.html"), dir.path().join("c.json"));
-    vrpt(&[
+    vrpt_ok(&[
         "compare",
         &scene,
         "--reference",
@@ -321,7 +308,7 @@ fn converge_report_in_a_browser() {
     let (r, scene, ref_image) = reference(dir.path());
     let s = |p: &Path| p.to_str().unwrap().to_string();
     let (report, results) = (dir.path().join("converge.html"), dir.path().join("c.json"));
-    vrpt(&[
+    vrpt_ok(&[
         "converge",
         &scene,
         "--reference",
@@ -384,7 +371,7 @@ fn diff_report_in_a_browser() {
     let img = dir.path().join("nee.exr");
     let a = render(16, 5, "nee", &img);
     let report = dir.path().join("diff.html");
-    vrpt(&["diff", &s(&img), &s(&r), "--report", &s(&report)]);
+    vrpt_ok(&["diff", &s(&img), &s(&r), "--report", &s(&report)]);
     let r = ref_image;
     let p = payload(&report);
     assert_payload_holds(&p, "nee.exr", "", &a);
@@ -422,7 +409,7 @@ fn a_report_is_deterministic_but_for_its_timings() {
     let s = |p: &Path| p.to_str().unwrap().to_string();
     let run = |name: &str| {
         let out = dir.path().join(name);
-        vrpt(&[
+        vrpt_ok(&[
             "compare",
             &scene,
             "--reference",

@@ -4,6 +4,7 @@
 //! output.
 
 use crate::common;
+use common::{ok, vrpt};
 
 use std::path::Path;
 use std::process::{Command, Output, Stdio};
@@ -14,22 +15,6 @@ use vrpt::output::RenderMetadata;
 use vrpt::render::{render, render_passes, NoProgress, PassPlan, RenderSettings};
 use vrpt::sampler::SamplerKind;
 use vrpt::strategy::Strategy;
-
-fn vrpt(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_vrpt"))
-        .args(args)
-        .output()
-        .expect("run vrpt")
-}
-
-fn ok(out: Output) -> Output {
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
-}
 
 /// The merge of shards equals the render of all the samples to f32 rounding. Both are f32
 /// roundings of the same per-pixel mean: the render rounds Σx/N once (relative error ≤ 2⁻²⁴);

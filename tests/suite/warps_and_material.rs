@@ -24,11 +24,6 @@ fn alpha() -> f64 {
     sidak(0.01, TESTS)
 }
 
-fn points(seed: u64) -> impl FnMut() -> Vec2 {
-    let mut rng = SmallRng::seed_from_u64(seed);
-    move || Vec2::new(rng.random(), rng.random())
-}
-
 fn check(name: &str, r: &Chi2Result, normalized: bool) {
     eprintln!(
         "{name}: chi2 {:.1} dof {} p {:.4} ∫pdf {:.6} failed {}",
@@ -61,7 +56,7 @@ fn hemisphere_warps_fit_their_pdfs() {
                 0.0
             }
         },
-        points(1),
+        common::uniform_pairs(1),
         SAMPLES,
         &b,
     );
@@ -69,7 +64,7 @@ fn hemisphere_warps_fit_their_pdfs() {
     let r = chi2_directions(
         |u| Some(sample_cosine_hemisphere(u)),
         |w| cosine_hemisphere_pdf(w.z),
-        points(2),
+        common::uniform_pairs(2),
         SAMPLES,
         &b,
     );
@@ -88,7 +83,7 @@ fn phong_lobe_fits_its_pdf() {
         let r = chi2_directions(
             |u| Some(sample_phong_lobe(n, u)),
             |w| phong_lobe_pdf(n, w.z),
-            points(10 + k as u64),
+            common::uniform_pairs(10 + k as u64),
             SAMPLES,
             &b,
         );
@@ -137,7 +132,7 @@ fn material_sampling_fits_its_pdf_for_every_strategy() {
             let r = chi2_directions(
                 |u| m.sample(wo, lobe_rng.random(), u, directions).map(|s| s.wi),
                 |wi| m.pdf(wo, wi, directions),
-                points(seed),
+                common::uniform_pairs(seed),
                 SAMPLES,
                 &b,
             );
@@ -245,7 +240,7 @@ fn chi2_rejects_a_wrong_pdf() {
                 0.0
             }
         },
-        points(3),
+        common::uniform_pairs(3),
         SAMPLES,
         &b,
     );
@@ -253,7 +248,7 @@ fn chi2_rejects_a_wrong_pdf() {
     let r = chi2_directions(
         |u| Some(sample_phong_lobe(10.0, u)),
         |w| phong_lobe_pdf(11.0, w.z),
-        points(4),
+        common::uniform_pairs(4),
         SAMPLES,
         &b,
     );
