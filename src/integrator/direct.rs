@@ -14,8 +14,8 @@ use glam::Vec3;
 
 impl Path<'_> {
     /// What the light sample at `v` adds to the path's radiance (throughput `beta` so far), or
-    /// `None` where it adds nothing: no light, a light behind the surface, a black BSDF in its
-    /// direction, or a shadow ray that is blocked.
+    /// `None` where it adds nothing: no light sampling (`bsdf`, or a scene without lights), no
+    /// light, a light behind the surface, a black BSDF in its direction, or a blocked shadow ray.
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     pub(super) fn next_event(
@@ -28,6 +28,9 @@ impl Path<'_> {
         rays: &mut RayCounts,
         stack: &mut TraceStack,
     ) -> Option<Vec3> {
+        if !self.sample_lights {
+            return None;
+        }
         let (scene, settings) = (self.scene, self.settings);
         let ls = self.lights.sample(v.p, v.ns, u.light, u.light_point)?;
         let wi_local = v.frame.to_local(ls.wi);

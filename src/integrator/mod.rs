@@ -200,16 +200,21 @@ impl Previous {
     }
 }
 
-/// The probability that Russian roulette keeps a path of throughput `beta` (after the bounce):
-/// `min(max β, 0.95)`, or with a guided bounce the larger of that and the guide's
-/// [`GuideAt::survival`].
+/// Russian roulette after a bounce: the path goes on with probability `q = min(max β, 0.95)`
+/// (with a guided bounce the larger of that and the guide's [`GuideAt::survival`]), decided by
+/// `u`; a path that goes on has its throughput `beta` divided by `q`. Whether it goes on.
 #[inline(always)]
-fn survival(beta: Vec3, guided: Option<(&GuideAt, &Mixture)>) -> f32 {
+fn survives(beta: &mut Vec3, u: f32, guided: Option<(&GuideAt, &Mixture)>) -> bool {
     let q = beta.max_element().min(0.95);
-    match guided {
-        Some((g, mix)) => q.max(g.survival(beta, mix.p_guide)),
+    let q = match guided {
+        Some((g, mix)) => q.max(g.survival(*beta, mix.p_guide)),
         None => q,
+    };
+    if u >= q {
+        return false;
     }
+    *beta /= q;
+    true
 }
 
 /// A surface vertex as a bounce sees it: both normals on the side the ray came from, the
@@ -340,15 +345,10 @@ impl<'a> Path<'a> {
                 break;
             };
             let s = scene.surface(&hit);
-            let m = scene.material_at(&s);
             let wo = -dir;
             let front = s.ng.dot(wo) > 0.0;
-            if front && m.is_emissive() {
-                let w = self.emission_weight(prev, |v| {
-                    let light = scene.lights.light_of(hit.prim);
-                    light.map_or(0.0, |i| self.lights.pdf(i, v.p, v.n, s.p))
-                });
-                l += beta * m.emission * w;
+            if let Some((le, w)) = self.emitted(prev, hit.prim, &s, front) {
+                l += beta * le * w;
             }
             if segment == settings.max_depth {
                 break;
@@ -367,10 +367,7 @@ impl<'a> Path<'a> {
             );
             let v = Vertex::new(scene, &s, front, wo);
             let g = self.guide.map(|t| GuideAt::new(t, s.p));
-            let direct = self
-                .sample_lights
-                .then(|| self.next_event(&v, &bsdf, g.as_ref(), &u, beta, rays, stack));
-            if let Some(Some(d)) = direct {
+            if let Some(d) = self.next_event(&v, &bsdf, g.as_ref(), &u, beta, rays, stack) {
                 l += d;
             }
             let Some((wi, bs, mix)) = self.sample_direction(&v, &bsdf, g.as_ref(), &u) else {
@@ -383,13 +380,10 @@ impl<'a> Path<'a> {
             if let (Some(g), Some(mix), Some(rec)) = (&g, &mix, rec.as_deref_mut()) {
                 rec.bounce(g, v.p, mix, &bs, beta, l);
             }
-            if segment >= RR_START_BOUNCE {
-                // segment = the vertices so far after the camera
-                let q = survival(beta, g.as_ref().zip(mix.as_ref()));
-                if u.roulette >= q {
-                    break;
-                }
-                beta /= q;
+            // segment = the vertices so far after the camera
+            let guided = g.as_ref().zip(mix.as_ref());
+            if segment >= RR_START_BOUNCE && !survives(&mut beta, u.roulette, guided) {
+                break;
             }
             prev = Some(Previous::left(&v, bs.pdf));
             (origin, dir) = (v.spawn, wi);
@@ -398,6 +392,27 @@ impl<'a> Path<'a> {
             rec.finish(l);
         }
         l
+    }
+
+    /// What the surface hit at `s` (primitive `prim`, seen from its front or not) emits toward
+    /// the path, and its weight ([`Self::emission_weight`]); `None` where it emits nothing.
+    #[inline(always)]
+    fn emitted(
+        &self,
+        prev: Option<Previous>,
+        prim: u32,
+        s: &SurfacePoint,
+        front: bool,
+    ) -> Option<(Vec3, f32)> {
+        let m = self.scene.material_at(s);
+        if !(front && m.is_emissive()) {
+            return None;
+        }
+        let w = self.emission_weight(prev, |v| {
+            let light = self.scene.lights.light_of(prim);
+            light.map_or(0.0, |i| self.lights.pdf(i, v.p, v.n, s.p))
+        });
+        Some((m.emission, w))
     }
 
     /// The weight of emission a path reaches (a surface's, or the environment's where it
