@@ -47,7 +47,7 @@ impl<F: SamplerFactory> Job<'_, F> {
                 // 2.2× lower than uniform, against 1.3× with rounds of a fixed pass)
                 let left = t.saturating_sub(self.start.elapsed()).as_secs_f64();
                 let fit = (left * rate / (raw.len() as f64 * r64 as f64)) as u64;
-                (2 * last_size).min(fit).max(1)
+                crate::sampler::stratifiable((2 * last_size).min(fit))
             } else if rounds == 0 || steady {
                 first_round
             } else {
@@ -90,11 +90,14 @@ impl<F: SamplerFactory> Job<'_, F> {
                     vec![size as u32; raw.len()]
                 }
             };
-            // keep every pixel's sample indices below 2³²
+            // keep every pixel's sample indices below 2³², and its set off a sliver of a grid
             let counts: Vec<u32> = counts
                 .iter()
                 .zip(&next)
-                .map(|(&c, &o)| (c as u64).min(SAMPLE_INDICES.saturating_sub(o)).max(1) as u32)
+                .map(|(&c, &o)| {
+                    let c = crate::sampler::stratifiable(c as u64);
+                    c.min(SAMPLE_INDICES.saturating_sub(o)).max(1) as u32
+                })
                 .collect();
             let none = SamplePass { origin: 0, size: 1 };
             let round_start = Instant::now();

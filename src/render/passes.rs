@@ -52,7 +52,8 @@ impl<F: SamplerFactory> Job<'_, F> {
                     (Some(t), Some(r)) if last_size > 0 => {
                         let left = t.saturating_sub(self.start.elapsed()).as_secs_f64();
                         let fit = (left / (r * pixels).max(1e-12)) as u64;
-                        (2 * last_size).min(fit).max(1)
+                        // a size the clock picks, kept from a sliver of a grid
+                        crate::sampler::stratifiable((2 * last_size).min(fit))
                     }
                     _ => pass,
                 };

@@ -15,7 +15,7 @@ mod stratified;
 
 pub use independent::IndependentSampler;
 pub use sobol::SobolSampler;
-pub use stratified::{grid_shape, permute_index, StratifiedSampler};
+pub use stratified::{grid_shape, permute_index, stratifiable, StratifiedSampler};
 
 use glam::{UVec2, Vec2};
 
