@@ -41,7 +41,7 @@
 //! Rooms: this module holds the path loop (`Path::trace`: what a vertex adds, the bounce, the
 //! roulette) and the one emission weight; `direct` the light sample of a vertex (next-event
 //! estimation and its MIS weight); `recorder` what a training render keeps of a path
-//! (a [`PathRecorder`], the guide's records; an image's paths have none), so guided and
+//! (a `PathRecorder`, the guide's records; an image's paths have none), so guided and
 //! unguided paths are one loop.
 
 mod direct;

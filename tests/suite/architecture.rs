@@ -4,9 +4,10 @@
 //!   in ARCHITECTURE.md; every `crate::NAME` path in `src/` (in `use` lines and in code, outside
 //!   comments; `crate::{a, b}` groups too) must name the module itself or one listed above it,
 //!   and every top module of `src/` must be in the table.
-//! - **Every relative link and image** of README.md, ARCHITECTURE.md and scenes/README.md
-//!   resolves to a file tracked by git (`*.png` is ignored by .gitignore: a picture that is
-//!   only on one machine is broken on every clone).
+//! - **Every relative link and image** of README.md, ARCHITECTURE.md, scenes/README.md and the
+//!   manual's chapters (`docs/*.md`) resolves to a file tracked by git (`*.png` is ignored by
+//!   .gitignore: a picture that is only on one machine is broken on every clone), every anchor
+//!   to a heading of its document, and the front page links every chapter.
 //! - **The binary stays thin**: `src/cli.rs` at most 450 lines.
 
 use std::collections::BTreeMap;
@@ -172,15 +173,15 @@ fn lower_modules_never_import_higher_ones() {
     );
 }
 
-/// The targets of the relative links and images of a markdown text: `](target)` and
-/// `src="target"`, without anchors; web addresses and pure anchors are skipped.
-fn relative_links(markdown: &str) -> Vec<String> {
+/// The links and images of a markdown text: `](target)` and `src="target"`, each split into
+/// its path (empty for a link within the text) and its anchor (empty for none); web addresses
+/// and mail are skipped.
+fn links(markdown: &str) -> Vec<(String, String)> {
     let mut out = Vec::new();
     let mut rest = markdown;
     while let Some(i) = rest.find("](") {
         rest = &rest[i + 2..];
-        let target = rest.split(')').next().unwrap_or("");
-        out.push(target.to_string());
+        out.push(rest.split(')').next().unwrap_or("").to_string());
     }
     let mut rest = markdown;
     while let Some(i) = rest.find("src=\"") {
@@ -188,9 +189,114 @@ fn relative_links(markdown: &str) -> Vec<String> {
         out.push(rest.split('"').next().unwrap_or("").to_string());
     }
     out.into_iter()
-        .map(|t| t.split('#').next().unwrap_or("").trim().to_string())
+        .map(|t| t.trim().to_string())
         .filter(|t| !t.is_empty() && !t.contains("://") && !t.starts_with("mailto:"))
+        .map(|t| match t.split_once('#') {
+            Some((path, anchor)) => (path.to_string(), anchor.to_string()),
+            None => (t, String::new()),
+        })
         .collect()
+}
+
+/// The anchors GitHub gives a markdown text's headings (outside code fences): the heading
+/// lower-cased, spaces turned into `-`, and every character but letters, digits, `-` and `_`
+/// dropped; a repeated heading gets `-1`, `-2`, … .
+fn anchors(markdown: &str) -> Vec<String> {
+    let mut out: Vec<String> = Vec::new();
+    let mut fenced = false;
+    for line in markdown.lines() {
+        if line.trim_start().starts_with("```") {
+            fenced = !fenced;
+            continue;
+        }
+        let Some(title) = line.strip_prefix('#').filter(|_| !fenced) else {
+            continue;
+        };
+        let title = title.trim_start_matches('#');
+        if !title.starts_with(' ') {
+            continue;
+        }
+        let slug: String = title
+            .trim()
+            .to_lowercase()
+            .chars()
+            .filter_map(|c| match c {
+                ' ' => Some('-'),
+                c if c.is_alphanumeric() || c == '-' || c == '_' => Some(c),
+                _ => None,
+            })
+            .collect();
+        let seen = out.iter().filter(|a| **a == slug).count()
+            + out
+                .iter()
+                .filter(|a| {
+                    a.strip_prefix(&format!("{slug}-"))
+                        .is_some_and(|n| n.parse::<u32>().is_ok())
+                })
+                .count();
+        out.push(if seen == 0 {
+            slug
+        } else {
+            format!("{slug}-{seen}")
+        });
+    }
+    out
+}
+
+#[test]
+fn anchors_and_links_are_read_as_github_does() {
+    let text =
+        "# vrpt\n## `vrpt render`\n```sh\n# a comment\n```\n## Lights: MIS, Veach's picture\n\
+                ## Lights: MIS, Veach's picture\n#nope\n";
+    assert_eq!(
+        anchors(text),
+        [
+            "vrpt",
+            "vrpt-render",
+            "lights-mis-veachs-picture",
+            "lights-mis-veachs-picture-1"
+        ]
+    );
+    assert_eq!(
+        links("[a](docs/x.md#y) ![b](p.png) [c](#z) [d](https://e.f)"),
+        [
+            ("docs/x.md".to_string(), "y".to_string()),
+            ("p.png".to_string(), String::new()),
+            (String::new(), "z".to_string())
+        ]
+    );
+}
+
+/// The documents whose links are checked: the front page, ARCHITECTURE.md, the scenes' README
+/// and every chapter of the manual under `docs/`.
+fn documents() -> Vec<String> {
+    let mut docs: Vec<String> = ["README.md", "ARCHITECTURE.md", "scenes/README.md"]
+        .map(String::from)
+        .to_vec();
+    let mut chapters: Vec<String> = std::fs::read_dir(root().join("docs"))
+        .unwrap()
+        .filter_map(|e| e.ok()?.file_name().into_string().ok())
+        .filter(|n| n.ends_with(".md"))
+        .map(|n| format!("docs/{n}"))
+        .collect();
+    chapters.sort();
+    docs.extend(chapters);
+    docs
+}
+
+/// `target` read from the folder `dir`, with `a/../b` and `./b` resolved.
+fn resolve(dir: &Path, target: &str) -> String {
+    let mut parts: Vec<String> = Vec::new();
+    for c in dir.join(target).components() {
+        match c {
+            std::path::Component::ParentDir => {
+                parts.pop();
+            }
+            std::path::Component::CurDir => {}
+            c => parts.push(c.as_os_str().to_string_lossy().into_owned()),
+        }
+    }
+    parts.join("/")
 }
 
 #[test]
@@ -212,24 +318,22 @@ fn every_relative_link_and_picture_is_a_tracked_file() {
             None
         }
     };
+    let docs = documents();
+    assert!(
+        docs.len() >= 8,
+        "the manual's chapters are missing: {docs:?}"
+    );
     let mut bad = Vec::new();
     let mut checked = 0;
-    for doc in ["README.md", "ARCHITECTURE.md", "scenes/README.md"] {
+    for doc in &docs {
         let text = std::fs::read_to_string(root().join(doc)).unwrap();
         let dir = Path::new(doc).parent().unwrap();
-        for target in relative_links(&text) {
-            // normalise `a/../b` and `./b` against the document's folder
-            let mut parts: Vec<String> = Vec::new();
-            for c in dir.join(&target).components() {
-                match c {
-                    std::path::Component::ParentDir => {
-                        parts.pop();
-                    }
-                    std::path::Component::CurDir => {}
-                    c => parts.push(c.as_os_str().to_string_lossy().into_owned()),
-                }
-            }
-            let path = parts.join("/");
+        for (target, anchor) in links(&text) {
+            let path = if target.is_empty() {
+                doc.clone()
+            } else {
+                resolve(dir, &target)
+            };
             checked += 1;
             let exists = root().join(&path).exists();
             let is_tracked = tracked.as_ref().is_none_or(|t| {
@@ -245,11 +349,33 @@ fn every_relative_link_and_picture_is_a_tracked_file() {
                         "no such file"
                     }
                 ));
+            } else if !anchor.is_empty() && path.ends_with(".md") {
+                let heads = anchors(&std::fs::read_to_string(root().join(&path)).unwrap());
+                if !heads.contains(&anchor) {
+                    bad.push(format!(
+                        "{doc}: ({target}#{anchor}) -> no such heading in {path}"
+                    ));
+                }
             }
         }
     }
     assert!(checked >= 8, "only {checked} links found");
     assert!(bad.is_empty(), "\n{}", bad.join("\n"));
+}
+
+/// Every chapter of the manual is linked from the front page, which stays a front page.
+#[test]
+fn the_front_page_links_every_chapter_and_stays_short() {
+    let readme = std::fs::read_to_string(root().join("README.md")).unwrap();
+    let linked: Vec<String> = links(&readme).into_iter().map(|(p, _)| p).collect();
+    for doc in documents().iter().filter(|d| d.starts_with("docs/")) {
+        assert!(linked.contains(doc), "README.md does not link {doc}");
+    }
+    let lines = readme.lines().count();
+    assert!(
+        lines <= 300,
+        "README.md has {lines} lines: the manual's chapters are in docs/"
+    );
 }
 
 #[test]
@@ -262,4 +388,153 @@ fn the_binary_stays_thin() {
         lines <= 450,
         "src/cli.rs has {lines} lines: put the work in the library"
     );
+}
+
+/// The `a::b::C` paths a markdown text names in backticks (code spans), `vrpt::` dropped, with
+/// any call or generic tail cut: `LightSampler::sample(p, n)` is `LightSampler::sample`.
+fn code_paths(markdown: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    for (k, span) in markdown.split('`').enumerate() {
+        if k % 2 == 0 {
+            continue;
+        }
+        let path: String = span
+            .chars()
+            .take_while(|c| c.is_alphanumeric() || *c == '_' || *c == ':')
+            .collect();
+        let path = path.strip_prefix("vrpt::").unwrap_or(&path).to_string();
+        if path.contains("::") && !path.ends_with(':') && !path.starts_with(':') {
+            out.push(path);
+        }
+    }
+    out
+}
+
+/// Whether `name` is defined in `source`: an item (`fn`, `struct`, `enum`, `trait`, `type`,
+/// `const`, `static`, `mod`), or an enum variant or field at the start of a line.
+fn defines(source: &str, name: &str) -> bool {
+    let item = [
+        "fn", "struct", "enum", "trait", "type", "const", "static", "mod",
+    ]
+    .iter()
+    .any(|kw| {
+        source.match_indices(&format!("{kw} {name}")).any(|(i, m)| {
+            let after = source[i + m.len()..].chars().next();
+            let before = source[..i].chars().last();
+            !after.is_some_and(|c| c.is_alphanumeric() || c == '_')
+                && !before.is_some_and(|c| c.is_alphanumeric() || c == '_')
+        })
+    });
+    item || source.lines().any(|l| {
+        let l = l
+            .trim_start()
+            .trim_start_matches("pub ")
+            .trim_start_matches("pub(super) ");
+        l.strip_prefix(name)
+            .is_some_and(|rest| rest.starts_with([',', '(', ' ', ':', '{']) || rest.is_empty())
+    })
+}
+
+/// The source files of `src/` below the module path `modules` (`["render", "passes"]`), or
+/// `None` where no such module is a file or folder.
+fn module_files(modules: &[&str]) -> Option<Vec<PathBuf>> {
+    let mut dir = root().join("src");
+    for (k, m) in modules.iter().enumerate() {
+        let file = dir.join(format!("{m}.rs"));
+        let folder = dir.join(m);
+        if k + 1 == modules.len() {
+            let mut files = Vec::new();
+            if file.exists() {
+                files.push(file);
+            }
+            if folder.is_dir() {
+                rust_files(&folder, &mut files);
+            }
+            return (!files.is_empty()).then_some(files);
+        }
+        if !folder.is_dir() {
+            return None;
+        }
+        dir = folder;
+    }
+    None
+}
+
+/// Every `path::Name` ARCHITECTURE.md names exists: the leading segments that are modules of
+/// `src/` are files or folders, and the rest are defined in them (a type, then a method,
+/// variant or field of it, defined in a file that has the type's `impl` or definition).
+/// Paths into other crates (`std::`, `clap::`) are not checked.
+#[test]
+fn every_name_architecture_md_gives_exists() {
+    let text = std::fs::read_to_string(root().join("ARCHITECTURE.md")).unwrap();
+    let mut all = Vec::new();
+    rust_files(&root().join("src"), &mut all);
+    let read = |files: &[PathBuf]| -> Vec<String> {
+        files
+            .iter()
+            .map(|f| std::fs::read_to_string(f).unwrap())
+            .collect()
+    };
+    let everything = read(&all);
+    let mut missing = Vec::new();
+    let mut checked = 0;
+    for path in code_paths(&text) {
+        let segments: Vec<&str> = path.split("::").collect();
+        // the longest leading run of segments that is a module path
+        let modules = (1..=segments.len())
+            .rev()
+            .find(|&k| module_files(&segments[..k]).is_some())
+            .unwrap_or(0);
+        let first_is_type = segments[0].starts_with(char::is_uppercase);
+        if modules == 0 && !first_is_type {
+            continue; // another crate's path
+        }
+        checked += 1;
+        let mut scope = if modules > 0 {
+            read(&module_files(&segments[..modules]).unwrap())
+        } else {
+            everything.clone()
+        };
+        for name in &segments[modules..] {
+            if !scope.iter().any(|s| defines(s, name)) {
+                missing.push(format!("`{path}`: no `{name}`"));
+                break;
+            }
+            // what follows a type is in the files that define or implement it
+            let owners: Vec<String> = everything
+                .iter()
+                .filter(|s| {
+                    defines(s, name)
+                        || s.contains(&format!("impl {name}"))
+                        || s.contains(&format!("for {name}"))
+                        || s.contains(&format!("> {name}<"))
+                        || s.contains(&format!("impl<'a> {name}"))
+                        || s.contains(&format!("impl {name}<"))
+                })
+                .cloned()
+                .collect();
+            scope = owners;
+        }
+    }
+    assert!(
+        checked >= 30,
+        "only {checked} paths found in ARCHITECTURE.md"
+    );
+    assert!(
+        missing.is_empty(),
+        "ARCHITECTURE.md names what the code lacks:\n{}",
+        missing.join("\n")
+    );
+}
+
+#[test]
+fn code_paths_are_read_from_code_spans() {
+    let text = "the `LightSampler::sample(p, n)` and `vrpt::render::passes`, not `a`, `std::f32`";
+    assert_eq!(
+        code_paths(text),
+        ["LightSampler::sample", "render::passes", "std::f32"]
+    );
+    assert!(defines("pub fn sample(&self)", "sample"));
+    assert!(!defines("pub fn sampled(&self)", "sample"));
+    assert!(defines("enum K {\n    Stratified,\n}", "Stratified"));
 }
