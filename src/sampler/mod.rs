@@ -11,11 +11,13 @@
 mod independent;
 pub mod layout;
 mod sobol;
+mod strata;
 mod stratified;
 
 pub use independent::IndependentSampler;
 pub use sobol::SobolSampler;
-pub use stratified::{grid_shape, permute_index, stratifiable, StratifiedSampler};
+pub use strata::{grid_shape, permute_index, stratifiable};
+pub use stratified::StratifiedSampler;
 
 use glam::{UVec2, Vec2};
 

@@ -32,129 +32,10 @@
 //! complete, independent stratified set, so runs of several passes stay unbiased and
 //! stratified pass by pass.
 
+use super::strata::{grid_shape, mask_of, permute_with, FastDiv};
 use super::{Sampler, ONE_MINUS_EPSILON};
 use crate::math::{hash_words, mix64};
 use glam::{UVec2, Vec2};
-
-/// The 2D grid `(a, b)` for N strata: `a·b = N`, `a ≤ b`, as square as N allows.
-pub fn grid_shape(n: u32) -> (u32, u32) {
-    let n = n.max(1);
-    let mut a = (n as f64).sqrt() as u32;
-    while a > 1 && !n.is_multiple_of(a) {
-        a -= 1;
-    }
-    let a = a.max(1);
-    (a, n / a)
-}
-
-/// The largest set size `≤ n` (at least 1) whose 2D grid is not a sliver: `n` itself where
-/// [`grid_shape`] gives it a side of at least `⌊√n⌋/2`, else `m·⌊n/m⌋` with `m = ⌊√n⌋`
-/// (an m × ⌊n/m⌋ grid, fewer than `√n` samples less). A size that follows the clock or an
-/// allocation can land anywhere, and a prime N is a 1 × N grid of slabs: on checker-plane two
-/// renders of 4093 spp differed by 14× the relMSE of two of 4096 (1.65e-5 against 1.16e-6),
-/// and 4140 = 60 × 69 gave 6.7e-7. Passes and rounds whose size is not asked for by the user
-/// take their size through this.
-pub fn stratifiable(n: u64) -> u64 {
-    let n = n.max(1);
-    let m = ((n as f64).sqrt() as u64).max(1);
-    let a = grid_shape(n.min(u32::MAX as u64) as u32).0 as u64;
-    if 2 * a >= m {
-        n
-    } else {
-        m * (n / m)
-    }
-}
-
-/// Element `i` of a pseudo-random permutation of `0..n` chosen by `key` (Kensler 2013,
-/// "Correlated multi-jittered sampling": a keyed bijection on the next power of two, with cycle
-/// walking back into `0..n`).
-#[inline]
-pub fn permute_index(i: u32, n: u32, key: u32) -> u32 {
-    if n <= 1 {
-        return 0;
-    }
-    permute_with(i, &FastDiv::new(n), mask_of(n), key)
-}
-
-/// The smallest `2^k − 1 ≥ n − 1`.
-fn mask_of(n: u32) -> u32 {
-    let mut w = n.max(1) - 1;
-    w |= w >> 1;
-    w |= w >> 2;
-    w |= w >> 4;
-    w |= w >> 8;
-    w |= w >> 16;
-    w
-}
-
-/// [`permute_index`] with the divisor and mask of `n` precomputed (n ≥ 2).
-#[inline]
-fn permute_with(mut i: u32, n: &FastDiv, w: u32, key: u32) -> u32 {
-    let p = key;
-    loop {
-        i ^= p;
-        i = i.wrapping_mul(0xe170_893d);
-        i ^= p >> 16;
-        i ^= (i & w) >> 4;
-        i ^= p >> 8;
-        i = i.wrapping_mul(0x0929_eb3f);
-        i ^= p >> 23;
-        i ^= (i & w) >> 1;
-        i = i.wrapping_mul(1 | p >> 27);
-        i = i.wrapping_mul(0x6935_fa69);
-        i ^= (i & w) >> 11;
-        i = i.wrapping_mul(0x74dc_b303);
-        i ^= (i & w) >> 2;
-        i = i.wrapping_mul(0x9e50_1cc3);
-        i ^= (i & w) >> 2;
-        i = i.wrapping_mul(0xc860_a3df);
-        i &= w;
-        i ^= i >> 5;
-        if i < n.d {
-            break;
-        }
-    }
-    // (i + p) mod n without overflow: i < n, so add p mod n and subtract n once if needed
-    let r = i + n.rem(p);
-    if r >= n.d {
-        r - n.d
-    } else {
-        r
-    }
-}
-
-/// Division and remainder by a fixed `d` with one multiplication each (Lemire, Kaser & Kurz
-/// 2019, "Faster remainder by direct computation"): `m = ⌊(2⁶⁴ − 1)/d⌋ + 1`, then
-/// `a / d = ⌊m·a / 2⁶⁴⌋` and `a mod d = ⌊(m·a mod 2⁶⁴)·d / 2⁶⁴⌋`, exact for all 32-bit `a`.
-#[derive(Clone, Copy, Debug)]
-struct FastDiv {
-    d: u32,
-    m: u64,
-}
-
-impl FastDiv {
-    fn new(d: u32) -> Self {
-        let d = d.max(1);
-        FastDiv {
-            d,
-            m: (u64::MAX / d as u64).wrapping_add(1),
-        }
-    }
-
-    #[inline]
-    fn div(&self, a: u32) -> u32 {
-        if self.d == 1 {
-            return a;
-        }
-        ((self.m as u128 * a as u128) >> 64) as u32
-    }
-
-    #[inline]
-    fn rem(&self, a: u32) -> u32 {
-        let low = self.m.wrapping_mul(a as u64);
-        ((low as u128 * self.d as u128) >> 64) as u32
-    }
-}
 
 /// `s + j` for stratum `s` and jitter `j ∈ [0, 1)`, kept below `s + 1`: in f32, `s + j` rounds
 /// up to `s + 1` when `j` is within half an ulp of `s` of 1, which would put the sample on the
@@ -531,6 +412,7 @@ impl Sampler for StratifiedSampler {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::sampler::{permute_index, stratifiable};
 
     #[test]
     fn grid_shapes() {
