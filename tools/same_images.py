@@ -3,10 +3,13 @@
 differ: the check that a refactor or an optimisation leaves images bit-identical.
 
     python3 tools/same_images.py OLD_VRPT NEW_VRPT [--size 24] [--spp 4] [--scenes a,b]
+                                 [--flags "--adaptive --spp 64"]
                                  [--extra-flags "--light-points area"]
 
 Each image is a small EXR (default 24x24 at 4 spp, seed 7); the two are compared pixel by pixel
-with NEW_VRPT's `diff` ("max relative difference"). Prints one line per (scene, strategy) that
+with NEW_VRPT's `diff` ("max relative difference"). `--flags` go to both binaries (to compare
+replicates, adaptive rounds, passes); `--extra-flags` to the new one only (a value the old
+binary lacks). Prints one line per (scene, strategy) that
 differs and a summary; exits 1 if any differs. Strategies: every SAMPLER+DIRECTIONS+LIGHTS that
 NEW_VRPT's `render --help` lists, so a new axis value is covered (an old binary that does not
 know a value is reported as such, not as a difference).
@@ -40,6 +43,7 @@ def main():
     ap.add_argument("--size", default="24")
     ap.add_argument("--spp", default="4")
     ap.add_argument("--scenes", default=None)
+    ap.add_argument("--flags", default="")
     ap.add_argument("--extra-flags", default="")
     a = ap.parse_args()
     scenes = (
@@ -59,6 +63,7 @@ def main():
                     args = [vrpt, "render", str(ROOT / "scenes" / scene), "-q", "-o", path,
                             "--width", a.size, "--height", a.size, "--spp", a.spp, "--seed", "7",
                             "--sampler", sampler, "--directions", directions, "--lights", lights]
+                    args += a.flags.split()
                     args += a.extra_flags.split() if tag == "new" else []
                     r = subprocess.run(args, capture_output=True, text=True)
                     if r.returncode != 0:

@@ -37,9 +37,9 @@ mod stats;
 mod tile;
 mod training;
 pub use stats::{GuideStats, RenderStats};
-use tile::{render_with, tile_count, Alloc};
+use tile::{tile_count, Alloc, Batch, BatchOutput, Kernel, Samples};
 pub use training::learn_guide;
-use training::train_guide;
+use training::Trainer;
 
 /// Tile edge in pixels.
 pub const TILE: u32 = 16;
@@ -450,8 +450,16 @@ pub fn render_passes_with<F: SamplerFactory>(
     let start = Instant::now();
     with_threads(settings.threads, || {
         let mut stats = RenderStats::default();
-        let tree = (settings.strategy.directions == Directions::Guided)
-            .then(|| train_guide((scene, &camera, settings, plan), factory, start, &mut stats));
+        let tree = (settings.strategy.directions == Directions::Guided).then(|| {
+            let trainer = Trainer {
+                scene,
+                camera: &camera,
+                settings,
+                plan,
+                factory,
+            };
+            trainer.train(start, &mut stats)
+        });
         let training = start.elapsed();
         let job = Job {
             scene,
@@ -507,12 +515,14 @@ impl<F: SamplerFactory> Job<'_, F> {
         self.plan.stop.is_some_and(|f| f.load(Ordering::Relaxed))
     }
 
-    /// Render into `film` with replicate `rep`'s seed; add the counts to `stats`; (wall seconds
-    /// per pixel sample of the pixels completed, if any; whether the stop flag cut a tile).
+    /// Render the samples `samples` of every tile into `film` with replicate `rep`'s seed,
+    /// reading `stop`; add the counts to `stats`; (wall seconds per pixel sample of the pixels
+    /// completed, if any; whether the stop flag cut a tile).
     fn batch(
         &self,
         rep: u32,
-        (set, range, stop, alloc): (SamplePass, Range<u64>, Option<&AtomicBool>, Option<Alloc>),
+        samples: Samples,
+        stop: Option<&AtomicBool>,
         film: &mut Film,
         stats: &mut RenderStats,
     ) -> (Option<f64>, bool) {
@@ -520,21 +530,26 @@ impl<F: SamplerFactory> Job<'_, F> {
             seed: replicate_seed(self.settings.seed, rep),
             ..self.settings.clone()
         };
-        let (s, cut, _, _) = render_with(
+        let kernel = Kernel::new(
             self.scene,
             self.camera,
             &settings,
             self.factory,
-            (set, range, 0..tile_count(self.settings), stop, alloc),
             self.guide,
-            Some(film),
             self.progress,
         );
+        let batch = Batch {
+            samples,
+            tiles: 0..tile_count(self.settings),
+            stop,
+        };
+        let out = kernel.render(&batch, Some(film));
+        let s = out.stats;
         stats.rays.add(&s.rays);
         stats.samples += s.samples;
         stats.nonfinite += s.nonfinite;
         stats.thread_time += s.thread_time;
         let rate = (s.samples > 0).then(|| s.elapsed.as_secs_f64() / s.samples as f64);
-        (rate, cut)
+        (rate, out.cut)
     }
 }

@@ -10,6 +10,24 @@
 
 use super::*;
 
+/// One uniform pass: the samples `bounds` (relative to the render's first sample) of pass `k`,
+/// which is the set of replicate `rep` whose first sample index is `origin`.
+struct UniformPass {
+    bounds: Range<u64>,
+    k: u64,
+    rep: u32,
+    origin: u64,
+}
+
+/// What a pass rendered: its film, the samples per pixel it holds, the wall seconds per pixel
+/// sample of the pixels it completed (if any), and whether the stop flag cut it.
+struct PassOutput {
+    film: Film,
+    samples: u64,
+    rate: Option<f64>,
+    cut: bool,
+}
+
 impl<F: SamplerFactory> Job<'_, F> {
     /// Every pixel the same samples, in passes; pass `k` belongs to replicate `k mod R` and
     /// holds that replicate's sample indices `first + ⌊k/R⌋·P ..` (see [`render_passes`]).
@@ -29,7 +47,6 @@ impl<F: SamplerFactory> Job<'_, F> {
             None => 0..spp,
         };
         let first = settings.first_sample as u64;
-        let pixels = settings.width as f64 * settings.height as f64;
         let mut film = Film::new(settings.width, settings.height);
         let mut replicates = Replicates::new(settings.replicates, film.len());
         let mut done = range.start;
@@ -47,82 +64,27 @@ impl<F: SamplerFactory> Job<'_, F> {
                 interrupted = true;
                 break;
             }
-            let (bounds, k, rep, origin) = if growing {
-                let size = match (plan.time_limit, rate) {
-                    (Some(t), Some(r)) if last_size > 0 => {
-                        let left = t.saturating_sub(self.start.elapsed()).as_secs_f64();
-                        let fit = (left / (r * pixels).max(1e-12)) as u64;
-                        // a size the clock picks, kept from a sliver of a grid
-                        crate::sampler::stratifiable((2 * last_size).min(fit))
-                    }
-                    _ => pass,
-                };
-                (done..(done + size).min(spp), 0, 0, first + done)
+            let p = if growing {
+                self.growing_pass(done, last_size, rate)
             } else {
-                let bounds = pass_bounds(done, pass, spp);
-                let k = bounds.start / pass;
-                // the replicate's own sample indices: below first + spp ≤ 2³², so a u32
-                (
-                    bounds.clone(),
-                    k,
-                    (k % reps) as u32,
-                    first + k / reps * pass,
-                )
+                self.fixed_pass(done, pass)
             };
-            let set = SamplePass {
-                origin: origin as u32,
-                size: (bounds.end - bounds.start) as u32,
-            };
-            let end = bounds.end.min(range.end);
-            let at = |done: u64| origin + done - bounds.start;
-            let mut pass_film = Film::new(settings.width, settings.height);
-            if plan.stop.is_none() {
-                let (r, _) = self.batch(
-                    rep,
-                    (set, at(done)..at(end), None, None),
-                    &mut pass_film,
-                    stats,
-                );
-                rate = r.or(rate);
-                last_size = end - done;
-                done = end;
-            } else {
-                let (rate_cut, cut) = self.batch(
-                    rep,
-                    (set, at(done)..at(end), plan.stop, None),
-                    &mut pass_film,
-                    stats,
-                );
-                rate = rate_cut.or(rate);
-                if !cut {
-                    last_size = end - done;
-                    done = end;
-                } else {
-                    // stopped inside the pass: drop it, take every pixel's first samples of it
-                    // instead (one when no pixel finished, so no rate is known)
-                    let n =
-                        rate_cut.map_or(1, |r| (BATCH_SECONDS / (r * pixels).max(1e-12)) as u64);
-                    let n = n.clamp(1, end - done);
-                    pass_film = Film::new(settings.width, settings.height);
-                    self.batch(
-                        rep,
-                        (set, at(done)..at(done + n), None, None),
-                        &mut pass_film,
-                        stats,
-                    );
-                    done += n;
-                }
-                interrupted = self.stopped() && done < range.end;
+            let out = self.pass(&p, done..p.bounds.end.min(range.end), stats);
+            rate = out.rate.or(rate);
+            if !out.cut {
+                last_size = out.samples;
             }
-            film.merge(&pass_film).map_err(Error::Settings)?;
-            replicates.add_samples(rep, &pass_film);
+            done += out.samples;
+            interrupted = self.stopped() && done < range.end;
+            film.merge(&out.film).map_err(Error::Settings)?;
+            replicates.add_samples(p.rep, &out.film);
             if interrupted || plan.time_limit.is_some_and(|t| self.start.elapsed() >= t) {
                 break;
             }
             // a target error is checked after every whole round of R passes
             if let Some(target) = plan.target_error {
-                if done == bounds.end
-                    && (k + 1).is_multiple_of(reps)
+                if done == p.bounds.end
+                    && (p.k + 1).is_multiple_of(reps)
                     && ErrorEstimate::of(&replicates, &film).rel_mse <= target
                 {
                     break;
@@ -142,5 +104,84 @@ impl<F: SamplerFactory> Job<'_, F> {
             finished_uniformly: None,
             allocation: None,
         })
+    }
+
+    /// The pass of `pass` spp that holds sample `done` (relative to the render's first sample),
+    /// with the sample indices of its replicate: pass `k` is replicate `k mod R`'s pass `⌊k/R⌋`.
+    fn fixed_pass(&self, done: u64, pass: u64) -> UniformPass {
+        let reps = self.settings.replicates as u64;
+        let bounds = pass_bounds(done, pass, self.settings.spp as u64);
+        let k = bounds.start / pass;
+        // the replicate's own sample indices: below first + spp ≤ 2³², so a u32
+        let origin = self.settings.first_sample as u64 + k / reps * pass;
+        UniformPass {
+            bounds,
+            k,
+            rep: (k % reps) as u32,
+            origin,
+        }
+    }
+
+    /// The pass after `done` samples of a render whose passes follow the clock (one replicate):
+    /// `pass_spp` first (no `rate` or `last_size` yet), then twice the last pass while the time
+    /// left allows at `rate` wall seconds per pixel sample, else what it allows.
+    fn growing_pass(&self, done: u64, last_size: u64, rate: Option<f64>) -> UniformPass {
+        let (settings, plan) = (self.settings, self.plan);
+        let spp = settings.spp as u64;
+        let size = match (plan.time_limit, rate) {
+            (Some(t), Some(rate)) if last_size > 0 => {
+                let pixels = settings.width as f64 * settings.height as f64;
+                let left = t.saturating_sub(self.start.elapsed()).as_secs_f64();
+                let fit = (left / (rate * pixels).max(1e-12)) as u64;
+                // a size the clock picks, kept from a sliver of a grid
+                crate::sampler::stratifiable((2 * last_size).min(fit))
+            }
+            _ => plan.pass_spp.map_or(spp, |p| p as u64).clamp(1, spp.max(1)),
+        };
+        UniformPass {
+            bounds: done..(done + size).min(spp),
+            k: 0,
+            rep: 0,
+            origin: settings.first_sample as u64 + done,
+        }
+    }
+
+    /// Render the samples `span` (relative to the render's first sample) of pass `p`. A pass
+    /// the stop flag cuts is dropped, and every pixel's first samples of it rendered instead:
+    /// as many as take about [`BATCH_SECONDS`] at the speed of the pixels that finished (one
+    /// when none did).
+    fn pass(&self, p: &UniformPass, span: Range<u64>, stats: &mut RenderStats) -> PassOutput {
+        let (w, h) = (self.settings.width, self.settings.height);
+        let set = SamplePass {
+            origin: p.origin as u32,
+            size: (p.bounds.end - p.bounds.start) as u32,
+        };
+        let at = |done: u64| p.origin + done - p.bounds.start;
+        let samples = |n: u64| Samples::Pass {
+            set,
+            range: at(span.start)..at(span.start + n),
+        };
+        let all = span.end - span.start;
+        let mut film = Film::new(w, h);
+        let (rate, cut) = self.batch(p.rep, samples(all), self.plan.stop, &mut film, stats);
+        if !cut {
+            return PassOutput {
+                film,
+                samples: all,
+                rate,
+                cut,
+            };
+        }
+        let pixels = w as f64 * h as f64;
+        let n = rate.map_or(1, |r| (BATCH_SECONDS / (r * pixels).max(1e-12)) as u64);
+        let n = n.clamp(1, all);
+        let mut film = Film::new(w, h);
+        self.batch(p.rep, samples(n), None, &mut film, stats);
+        PassOutput {
+            film,
+            samples: n,
+            rate,
+            cut,
+        }
     }
 }

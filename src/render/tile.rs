@@ -4,8 +4,8 @@
 
 use super::*;
 
-/// One tile's result: pixel sums and counters.
-struct TileResult {
+/// One tile's work: its pixels' sums and counters, and the traversal stack its rays use.
+struct Tile {
     origin: UVec2,
     size: UVec2,
     sums: Vec<(DVec3, DVec3, u64)>,
@@ -17,6 +17,7 @@ struct TileResult {
     cut: bool,
     /// Its paths' guiding records, in sample order (training iterations only).
     records: Vec<Record>,
+    stack: TraceStack,
 }
 
 /// The number of tiles of a `settings`-sized image.
@@ -32,142 +33,226 @@ pub(super) struct Alloc<'a> {
     pub(super) count: &'a [u32],
 }
 
-/// Render the samples `range` (sample indices, all within `pass` and below
-/// [`SAMPLE_INDICES`]) of the tiles `tiles` (row-major tile indices) into `film`, going on from
-/// the sums it holds, on the current rayon pool, with the sampler `factory` makes for the pass
-/// and `settings.seed`; with `alloc`, each pixel's own set instead of `pass` and `range`.
-/// With `stop`, a tile reads the flag before each pixel (and every 256 samples of one) and ends
-/// there when it is set: the second value says whether some pixel was left out (the film then
-/// holds a partial batch, for the caller to drop).
-#[allow(clippy::too_many_arguments)]
-pub(super) fn render_with<F: SamplerFactory>(
-    scene: &Scene,
-    camera: &Camera,
-    settings: &RenderSettings,
-    factory: &F,
-    (pass, range, tiles, stop, alloc): (
-        SamplePass,
-        Range<u64>,
-        Range<u32>,
-        Option<&AtomicBool>,
-        Option<Alloc>,
-    ),
-    guide: Guide,
-    mut film: Option<&mut Film>,
-    progress: &dyn Progress,
-) -> (RenderStats, bool, Vec<Record>, DVec3) {
-    let start = Instant::now();
-    // training renders keep no film: their samples only teach the guide
-    let sums = film.as_deref();
-    let integrator = settings.integrator();
-    let sampler = factory.make(settings.seed, pass);
-    let tiles_x = settings.width.div_ceil(TILE);
-    let tiles: Vec<TileResult> = tiles
-        .into_par_iter()
-        .map_with(sampler, |sampler, t| {
-            let tile_start = Instant::now();
-            let origin = UVec2::new((t % tiles_x) * TILE, (t / tiles_x) * TILE);
-            let size = UVec2::new(
-                TILE.min(settings.width - origin.x),
-                TILE.min(settings.height - origin.y),
-            );
-            let mut tile = TileResult {
-                origin,
-                size,
-                sums: Vec::with_capacity((size.x * size.y) as usize),
-                rays: RayCounts::default(),
-                samples: 0,
-                nonfinite: 0,
-                time: Duration::ZERO,
-                cut: false,
-                records: Vec::new(),
-            };
-            let mut stack = TraceStack::default();
-            'pixels: for y in origin.y..origin.y + size.y {
-                for x in origin.x..origin.x + size.x {
-                    if stop.is_some_and(|f| f.load(Ordering::Relaxed)) {
-                        tile.cut = true;
-                        break 'pixels;
-                    }
-                    let pixel = UVec2::new(x, y);
-                    let i = (y * settings.width + x) as usize;
-                    let (mut sum, mut sum_sq, mut n) =
-                        sums.map_or((DVec3::ZERO, DVec3::ZERO, 0), |f| f.pixel_sums(i));
-                    let range = match alloc {
-                        None => range.clone(),
-                        Some(a) => {
-                            let set = SamplePass {
-                                origin: a.origin[i] as u32,
-                                size: a.count[i],
-                            };
-                            *sampler = factory.make(settings.seed, set);
-                            a.origin[i]..a.origin[i] + a.count[i] as u64
-                        }
-                    };
-                    for index in range.clone() {
-                        // a long pixel reads the flag too (every 256 samples: a relaxed load)
-                        if index % 256 == 255 && stop.is_some_and(|f| f.load(Ordering::Relaxed)) {
-                            tile.cut = true;
-                            break 'pixels;
-                        }
-                        // below SAMPLE_INDICES (checked by camera_for): a u32
-                        sampler.start_pixel_sample(pixel, index as u32);
-                        let ray = camera.generate_ray(pixel, CameraSample::draw(sampler).pixel);
-                        let l = radiance_guided(
-                            scene,
-                            ray,
-                            sampler,
-                            &integrator,
-                            &mut tile.rays,
-                            &mut stack,
-                            guide.tree,
-                            guide.record.then_some(&mut tile.records),
-                        );
-                        if l.is_finite() {
-                            let v = l.as_dvec3();
-                            sum += v;
-                            sum_sq += v * v;
-                            n += 1;
-                        } else {
-                            tile.nonfinite += 1;
-                        }
-                    }
-                    tile.samples += range.end - range.start;
-                    tile.sums.push((sum, sum_sq, n));
-                }
-            }
-            progress.advance(tile.samples);
-            tile.time = tile_start.elapsed();
-            tile
-        })
-        .collect();
-    let mut stats = RenderStats::default();
-    let mut cut = false;
-    let mut records = Vec::with_capacity(tiles.iter().map(|t| t.records.len()).sum());
-    // what the samples added (the pixels' sums less what the film held before)
-    let mut total = DVec3::ZERO;
-    for mut tile in tiles {
-        records.append(&mut tile.records);
-        if film.is_none() {
-            total += tile.sums.iter().map(|s| s.0).sum::<DVec3>();
+/// Which samples of each pixel a batch renders.
+#[derive(Clone)]
+pub(super) enum Samples<'a> {
+    /// The sample indices `range` (all within `set`) of the set `set`, for every pixel.
+    Pass { set: SamplePass, range: Range<u64> },
+    /// Each pixel its own set (an adaptive round).
+    Own(Alloc<'a>),
+}
+
+/// A batch of the tile kernel: which samples, of which tiles (row-major tile indices), and the
+/// stop flag it reads (`None`: it runs to its end).
+#[derive(Clone)]
+pub(super) struct Batch<'a> {
+    pub(super) samples: Samples<'a>,
+    pub(super) tiles: Range<u32>,
+    pub(super) stop: Option<&'a AtomicBool>,
+}
+
+/// What a batch made.
+pub(super) struct BatchOutput {
+    /// What it cost.
+    pub(super) stats: RenderStats,
+    /// Whether the stop flag left some pixel out (the film then holds a partial batch, for the
+    /// caller to drop).
+    pub(super) cut: bool,
+    /// The paths' guiding records, tile by tile in sample order (when the guide records).
+    pub(super) records: Vec<Record>,
+    /// What the samples added to the pixels' sums (a render without a film only).
+    pub(super) total: DVec3,
+}
+
+/// What the tile kernel renders with: the scene seen by the camera, with `settings` (whose seed
+/// is the batch's), the samplers `factory` makes, the guide, and a progress to advance.
+pub(super) struct Kernel<'a, F: SamplerFactory> {
+    scene: &'a Scene,
+    camera: &'a Camera,
+    settings: &'a RenderSettings,
+    integrator: IntegratorSettings,
+    factory: &'a F,
+    guide: Guide<'a>,
+    progress: &'a dyn Progress,
+}
+
+/// A pixel's running sums: Σ L, Σ L², and the finite samples' count.
+type Sums = (DVec3, DVec3, u64);
+
+impl<'a, F: SamplerFactory> Kernel<'a, F> {
+    /// The kernel of a render of `scene` through `camera` with `settings`.
+    pub(super) fn new(
+        scene: &'a Scene,
+        camera: &'a Camera,
+        settings: &'a RenderSettings,
+        factory: &'a F,
+        guide: Guide<'a>,
+        progress: &'a dyn Progress,
+    ) -> Self {
+        Kernel {
+            scene,
+            camera,
+            settings,
+            integrator: settings.integrator(),
+            factory,
+            guide,
+            progress,
         }
+    }
+
+    /// Render `batch` (sample indices below [`SAMPLE_INDICES`]) into `film`, going on from the
+    /// sums it holds, on the current rayon pool; without a film, from zero sums, keeping only
+    /// what the samples added (training). With a stop flag, a tile reads it before each pixel
+    /// (and every 256 samples of one) and ends there when it is set.
+    pub(super) fn render(&self, batch: &Batch, film: Option<&mut Film>) -> BatchOutput {
+        let start = Instant::now();
+        let sums = film.as_deref();
+        // one sampler for the pass, cloned per worker; an adaptive round makes one per pixel
+        let set = match &batch.samples {
+            Samples::Pass { set, .. } => *set,
+            Samples::Own(_) => SamplePass { origin: 0, size: 1 },
+        };
+        let sampler = self.factory.make(self.settings.seed, set);
+        let tiles: Vec<Tile> = batch
+            .tiles
+            .clone()
+            .into_par_iter()
+            .map_with(sampler, |sampler, t| self.tile(t, batch, sums, sampler))
+            .collect();
+        let mut out = gather(tiles, film);
+        out.stats.elapsed = start.elapsed();
+        out
+    }
+
+    /// Tile `t` of `batch`, its pixels in row order, each from its sums in `sums` (if any).
+    fn tile(&self, t: u32, batch: &Batch, sums: Option<&Film>, sampler: &mut F::Sampler) -> Tile {
+        let tile_start = Instant::now();
+        let (width, height) = (self.settings.width, self.settings.height);
+        let tiles_x = width.div_ceil(TILE);
+        let origin = UVec2::new((t % tiles_x) * TILE, (t / tiles_x) * TILE);
+        let size = UVec2::new(TILE.min(width - origin.x), TILE.min(height - origin.y));
+        let mut tile = Tile {
+            origin,
+            size,
+            sums: Vec::with_capacity((size.x * size.y) as usize),
+            rays: RayCounts::default(),
+            samples: 0,
+            nonfinite: 0,
+            time: Duration::ZERO,
+            cut: false,
+            records: Vec::new(),
+            stack: TraceStack::default(),
+        };
+        'pixels: for y in origin.y..origin.y + size.y {
+            for x in origin.x..origin.x + size.x {
+                if batch.stop.is_some_and(|f| f.load(Ordering::Relaxed)) {
+                    tile.cut = true;
+                    break 'pixels;
+                }
+                let i = (y * width + x) as usize;
+                let range = match &batch.samples {
+                    Samples::Pass { range, .. } => range.clone(),
+                    Samples::Own(a) => {
+                        let set = SamplePass {
+                            origin: a.origin[i] as u32,
+                            size: a.count[i],
+                        };
+                        *sampler = self.factory.make(self.settings.seed, set);
+                        a.origin[i]..a.origin[i] + a.count[i] as u64
+                    }
+                };
+                let from = sums.map_or((DVec3::ZERO, DVec3::ZERO, 0), |f| f.pixel_sums(i));
+                let pixel = UVec2::new(x, y);
+                let Some(s) = self.pixel(pixel, range, from, batch.stop, sampler, &mut tile) else {
+                    tile.cut = true;
+                    break 'pixels;
+                };
+                tile.sums.push(s);
+            }
+        }
+        self.progress.advance(tile.samples);
+        tile.time = tile_start.elapsed();
+        tile
+    }
+
+    /// The samples `range` of `pixel`, in index order, added to its sums `from`; `None` when
+    /// the stop flag (read every 256 samples) cut it. Rays, samples and non-finite samples are
+    /// counted in `tile`, and guiding records appended there when the guide records.
+    #[inline]
+    fn pixel(
+        &self,
+        pixel: UVec2,
+        range: Range<u64>,
+        from: Sums,
+        stop: Option<&AtomicBool>,
+        sampler: &mut F::Sampler,
+        tile: &mut Tile,
+    ) -> Option<Sums> {
+        let (mut sum, mut sum_sq, mut n) = from;
+        for index in range.clone() {
+            // a long pixel reads the flag too (every 256 samples: a relaxed load)
+            if index % 256 == 255 && stop.is_some_and(|f| f.load(Ordering::Relaxed)) {
+                return None;
+            }
+            // below SAMPLE_INDICES (checked by camera_for): a u32
+            sampler.start_pixel_sample(pixel, index as u32);
+            let ray = self
+                .camera
+                .generate_ray(pixel, CameraSample::draw(sampler).pixel);
+            let l = radiance_guided(
+                self.scene,
+                ray,
+                sampler,
+                &self.integrator,
+                &mut tile.rays,
+                &mut tile.stack,
+                self.guide.tree,
+                self.guide.record.then_some(&mut tile.records),
+            );
+            if l.is_finite() {
+                let v = l.as_dvec3();
+                sum += v;
+                sum_sq += v * v;
+                n += 1;
+            } else {
+                tile.nonfinite += 1;
+            }
+        }
+        tile.samples += range.end - range.start;
+        Some((sum, sum_sq, n))
+    }
+}
+
+/// The tiles' results gathered: their pixels' sums written into `film` (if any), their
+/// records concatenated in tile order, their counters summed.
+fn gather(tiles: Vec<Tile>, mut film: Option<&mut Film>) -> BatchOutput {
+    let mut out = BatchOutput {
+        stats: RenderStats::default(),
+        cut: false,
+        records: Vec::with_capacity(tiles.iter().map(|t| t.records.len()).sum()),
+        total: DVec3::ZERO,
+    };
+    for mut tile in tiles {
+        out.records.append(&mut tile.records);
         // the pixels a tile rendered, in its order (all of them unless it was cut short)
         let w = tile.size.x as usize;
-        if let Some(film) = film.as_deref_mut() {
-            for (k, &(s, s2, n)) in tile.sums.iter().enumerate() {
-                let (x, y) = (
-                    tile.origin.x + (k % w) as u32,
-                    tile.origin.y + (k / w) as u32,
-                );
-                film.set_pixel_sums(film.index(x, y), s, s2, n);
+        match film.as_deref_mut() {
+            None => out.total += tile.sums.iter().map(|s| s.0).sum::<DVec3>(),
+            Some(film) => {
+                for (k, &(s, s2, n)) in tile.sums.iter().enumerate() {
+                    let (x, y) = (
+                        tile.origin.x + (k % w) as u32,
+                        tile.origin.y + (k / w) as u32,
+                    );
+                    film.set_pixel_sums(film.index(x, y), s, s2, n);
+                }
             }
         }
-        cut |= tile.cut;
-        stats.rays.add(&tile.rays);
-        stats.samples += tile.samples;
-        stats.nonfinite += tile.nonfinite;
-        stats.thread_time += tile.time;
+        out.cut |= tile.cut;
+        out.stats.rays.add(&tile.rays);
+        out.stats.samples += tile.samples;
+        out.stats.nonfinite += tile.nonfinite;
+        out.stats.thread_time += tile.time;
     }
-    stats.elapsed = start.elapsed();
-    (stats, cut, records, total)
+    out
 }

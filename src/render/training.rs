@@ -5,37 +5,62 @@
 
 use super::*;
 
-/// The training iterations of a guided render (see [`crate::guiding`]): iterations of 1, 2,
-/// 4, … spp, each sampling with the tree the previous ones taught and recording into the next,
-/// while their sum stays within half the render's spp (at least one iteration), and with a time
-/// limit while the next iteration (estimated at twice the last) would end within a third of it.
-/// Iteration `k` uses seed `mix64(seed ⊕ (k + 1)·φ)`, whatever the render's first sample or
-/// shard: every shard of a render learns the same tree. A set stop flag ends the training.
-/// Training's rays and thread time are added to `stats`, and its [`GuideStats`] set there.
-pub(super) fn train_guide<F: SamplerFactory>(
-    (scene, camera, settings, plan): (&Scene, &Camera, &RenderSettings, &PassPlan),
-    factory: &F,
-    start: Instant,
-    stats: &mut RenderStats,
-) -> SdTree {
-    let (lo, hi) = scene_bounds(scene);
-    let mut tree = SdTree::new(lo, hi);
-    let budget = (settings.spp as u64 / 2).max(1);
-    let tiles = tile_count(settings);
-    let mut g = GuideStats::default();
-    let mut last = Duration::ZERO;
-    for k in 0u32..32 {
-        let spp = 1u64 << k;
-        if k > 0 {
-            let over_time = plan
-                .time_limit
-                .is_some_and(|t| start.elapsed() + 2 * last > t / 3);
-            let stopped = plan.stop.is_some_and(|f| f.load(Ordering::Relaxed));
-            if g.training_spp + spp > budget || over_time || stopped {
+/// What a guided render's training needs: the render's scene, camera, settings and plan, and
+/// the samplers `factory` makes.
+pub(super) struct Trainer<'a, F: SamplerFactory> {
+    pub(super) scene: &'a Scene,
+    pub(super) camera: &'a Camera,
+    pub(super) settings: &'a RenderSettings,
+    pub(super) plan: &'a PassPlan,
+    pub(super) factory: &'a F,
+}
+
+impl<F: SamplerFactory> Trainer<'_, F> {
+    /// The training iterations of a guided render (see [`crate::guiding`]): iterations of 1,
+    /// 2, 4, … spp, each sampling with the tree the previous ones taught and recording into the
+    /// next, while their sum stays within half the render's spp (at least one iteration), and
+    /// with a time limit while the next iteration (estimated at twice the last) would end within
+    /// a third of it (the render began at `start`). A set stop flag ends the training.
+    /// Training's rays and thread time are added to `stats`, and its [`GuideStats`] set there.
+    pub(super) fn train(&self, start: Instant, stats: &mut RenderStats) -> SdTree {
+        let (lo, hi) = scene_bounds(self.scene);
+        let mut tree = SdTree::new(lo, hi);
+        let budget = (self.settings.spp as u64 / 2).max(1);
+        let mut g = GuideStats::default();
+        let mut last = Duration::ZERO;
+        for k in 0u32..32 {
+            let spp = 1u64 << k;
+            if k > 0 {
+                let over_time = self
+                    .plan
+                    .time_limit
+                    .is_some_and(|t| start.elapsed() + 2 * last > t / 3);
+                let stopped = self.plan.stop.is_some_and(|f| f.load(Ordering::Relaxed));
+                if g.training_spp + spp > budget || over_time || stopped {
+                    break;
+                }
+            }
+            let began = Instant::now();
+            if !self.iteration(k, &mut tree, stats) {
                 break;
             }
+            g.iterations += 1;
+            g.training_spp += spp;
+            last = began.elapsed();
         }
-        let began = Instant::now();
+        g.training = start.elapsed();
+        stats.guide = Some(g);
+        tree
+    }
+
+    /// Training iteration `k`: `2^k` spp sampled with `tree` and recorded into it, chunk by
+    /// chunk in a fixed order, then the tree refined for the next iteration. It uses seed
+    /// `mix64(seed ⊕ (k + 1)·φ)`, whatever the render's first sample or shard: every shard of a
+    /// render learns the same tree. False when the stop flag cut it (its last chunk's records
+    /// dropped, the tree not refined).
+    fn iteration(&self, k: u32, tree: &mut SdTree, stats: &mut RenderStats) -> bool {
+        let settings = self.settings;
+        let spp = 1u64 << k;
         let iteration = RenderSettings {
             seed: crate::math::mix64(
                 settings.seed ^ (k as u64 + 1).wrapping_mul(0x9e37_79b9_7f4a_7c15),
@@ -46,56 +71,51 @@ pub(super) fn train_guide<F: SamplerFactory>(
             origin: 0,
             size: spp as u32,
         };
-        let mut stopped = false;
         let (mut sum, mut n_samples) = (glam::DVec3::ZERO, 0u64);
-        for (tile_range, samples) in training_chunks(tiles, spp) {
-            let pieces = sample_pieces(&tile_range, samples);
-            let results: Vec<(RenderStats, bool, Vec<Record>, glam::DVec3)> = pieces
+        for (tiles, samples) in training_chunks(tile_count(settings), spp) {
+            let pieces = sample_pieces(&tiles, samples);
+            let guide = Guide {
+                tree: Some(&*tree),
+                record: true,
+            };
+            let kernel = Kernel::new(
+                self.scene,
+                self.camera,
+                &iteration,
+                self.factory,
+                guide,
+                &NoProgress,
+            );
+            let results: Vec<BatchOutput> = pieces
                 .into_par_iter()
                 .map(|range| {
-                    render_with(
-                        scene,
-                        camera,
-                        &iteration,
-                        factory,
-                        (set, range, tile_range.clone(), plan.stop, None),
-                        Guide {
-                            tree: Some(&tree),
-                            record: true,
-                        },
-                        None,
-                        &NoProgress,
-                    )
+                    let batch = Batch {
+                        samples: Samples::Pass { set, range },
+                        tiles: tiles.clone(),
+                        stop: self.plan.stop,
+                    };
+                    kernel.render(&batch, None)
                 })
                 .collect();
-            stopped |= results.iter().any(|r| r.1);
-            if stopped {
-                break; // a cut chunk's records are dropped, and training ends
+            if results.iter().any(|r| r.cut) {
+                return false; // a cut chunk's records are dropped, and training ends
             }
             // piece by piece, in order: a leaf sees the records in the same order as from
             // their concatenation, without a copy of them all
-            for (s, _, records, total) in results {
-                sum += total;
-                n_samples += s.samples;
-                stats.rays.add(&s.rays);
-                stats.thread_time += s.thread_time;
-                tree.add_records(records);
+            for r in results {
+                sum += r.total;
+                n_samples += r.stats.samples;
+                stats.rays.add(&r.stats.rays);
+                stats.thread_time += r.stats.thread_time;
+                tree.add_records(r.records);
             }
-        }
-        if stopped {
-            break;
         }
         tree.finish_iteration(spp * settings.width as u64 * settings.height as u64);
         if n_samples > 0 {
             tree.set_image_mean(crate::math::luminance((sum / n_samples as f64).as_vec3()));
         }
-        g.iterations += 1;
-        g.training_spp += spp;
-        last = began.elapsed();
+        true
     }
-    g.training = start.elapsed();
-    stats.guide = Some(g);
-    tree
 }
 
 /// Path samples a training chunk renders at most: its records (about 16 bytes per bounce)
@@ -146,23 +166,32 @@ fn sample_pieces(tiles: &Range<u32>, samples: Range<u64>) -> Vec<Range<u64>> {
 /// same seeds and budget: the same tree), with the training's stats.
 pub fn learn_guide(scene: &Scene, settings: &RenderSettings) -> Result<(SdTree, RenderStats)> {
     let camera = camera_for(scene, settings)?;
-    let plan = PassPlan::default();
     with_threads(settings.threads, || {
         let mut stats = RenderStats::default();
         let start = Instant::now();
         struct Train<'a>(
-            (&'a Scene, &'a Camera, &'a RenderSettings, &'a PassPlan),
+            &'a Scene,
+            &'a Camera,
+            &'a RenderSettings,
             Instant,
             &'a mut RenderStats,
         );
         impl WithSampler for Train<'_> {
             type Out = SdTree;
             fn run<F: SamplerFactory>(self, factory: &F) -> SdTree {
-                train_guide(self.0, factory, self.1, self.2)
+                let plan = PassPlan::default();
+                let trainer = Trainer {
+                    scene: self.0,
+                    camera: self.1,
+                    settings: self.2,
+                    plan: &plan,
+                    factory,
+                };
+                trainer.train(self.3, self.4)
             }
         }
-        let c = (scene, &camera, settings, &plan);
-        let tree = with_sampler(settings.strategy.sampler, Train(c, start, &mut stats));
+        let work = Train(scene, &camera, settings, start, &mut stats);
+        let tree = with_sampler(settings.strategy.sampler, work);
         stats.elapsed = start.elapsed();
         (tree, stats)
     })
