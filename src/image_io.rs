@@ -337,7 +337,6 @@ pub const MAX_PIXELS_PER_BYTE: u64 = 1024;
 /// vrpt's metadata. Every pixel must be a finite colour, every variance finite and
 /// non-negative, every sample count a whole number (any other channel is ignored).
 pub fn read_exr(path: &Path) -> Result<RgbImage> {
-    use exr_prelude::FlatSamples;
     if !path.exists() {
         return Err(Error::NotFound {
             path: path.to_path_buf(),
@@ -358,42 +357,85 @@ pub fn read_exr(path: &Path) -> Result<RgbImage> {
         .map_err(|e| err(e.to_string()))?;
     let layer = &image.layer_data;
     let size = layer.size;
-    let (width, height) = (size.width(), size.height());
     let mut metadata = BTreeMap::new();
     for (k, v) in &layer.attributes.other {
         if let (Some(key), AttributeValue::Text(t)) = (k.to_string().strip_prefix("vrpt."), v) {
             metadata.insert(key.to_string(), t.to_string());
         }
     }
-    let find = |name: &str| {
-        layer
-            .channel_data
-            .list
+    let channels = ExrChannels {
+        path,
+        list: &layer.channel_data.list,
+        width: size.width(),
+        height: size.height(),
+    };
+    let pixels = channels
+        .rgb(["R", "G", "B"])
+        .ok_or_else(|| err("has no R, G and B channels".into()))?;
+    if let Some(i) = pixels.iter().position(|p| !p.is_finite()) {
+        let (x, y) = channels.at(i);
+        return Err(err(format!("pixel ({x}, {y}) is not a finite colour")));
+    }
+    Ok(RgbImage {
+        width: channels.width as u32,
+        height: channels.height as u32,
+        pixels,
+        variance: channels.variances(VARIANCE_CHANNELS, "variance")?,
+        estimated_variance: channels.variances(ESTIMATE_CHANNELS, "estimated variance")?,
+        samples: channels.samples()?,
+        metadata,
+    })
+}
+
+/// The channels of the EXR layer [`read_exr`] reads, its size, and its file (for errors).
+struct ExrChannels<'a> {
+    path: &'a Path,
+    list: &'a [exr_prelude::AnyChannel<exr_prelude::FlatSamples>],
+    width: usize,
+    height: usize,
+}
+
+impl ExrChannels<'_> {
+    /// An error reading the file.
+    fn err(&self, message: String) -> Error {
+        Error::ImageRead {
+            path: self.path.to_path_buf(),
+            message,
+        }
+    }
+
+    /// The pixel `(x, y)` of row-major index `i`.
+    fn at(&self, i: usize) -> (usize, usize) {
+        (i % self.width.max(1), i / self.width.max(1))
+    }
+
+    /// The samples of the channel `name`, if the layer has it.
+    fn find(&self, name: &str) -> Option<&exr_prelude::FlatSamples> {
+        self.list
             .iter()
             .find(|c| c.name == *name)
             .map(|c| &c.sample_data)
-    };
-    let at = |i: usize| (i % width.max(1), i / width.max(1));
-    let rgb_of = |names: [&str; 3]| -> Option<Vec<Vec3>> {
+    }
+
+    /// The three channels `names` as one colour per pixel, if the layer has all three.
+    fn rgb(&self, names: [&str; 3]) -> Option<Vec<Vec3>> {
         let planes: Vec<Vec<f32>> = names
             .iter()
-            .map(|n| find(n).map(|d| d.values_as_f32().collect()))
+            .map(|n| self.find(n).map(|d| d.values_as_f32().collect()))
             .collect::<Option<_>>()?;
         Some(
-            (0..width * height)
+            (0..self.width * self.height)
                 .map(|i| Vec3::new(planes[0][i], planes[1][i], planes[2][i]))
                 .collect(),
         )
-    };
-    let pixels = rgb_of(["R", "G", "B"]).ok_or_else(|| err("has no R, G and B channels".into()))?;
-    if let Some(i) = pixels.iter().position(|p| !p.is_finite()) {
-        let (x, y) = at(i);
-        return Err(err(format!("pixel ({x}, {y}) is not a finite colour")));
     }
-    let variances = |names: [&str; 3], what: &str| -> Result<Option<Vec<Vec3>>> {
-        let v = rgb_of(names);
-        if v.is_none() && names.iter().any(|n| find(n).is_some()) {
-            return Err(err(format!(
+
+    /// The variances in the channels `names` (called `what` in errors), if the layer has them:
+    /// an error where it has only some of the three or a value is negative or not finite.
+    fn variances(&self, names: [&str; 3], what: &str) -> Result<Option<Vec<Vec3>>> {
+        let v = self.rgb(names);
+        if v.is_none() && names.iter().any(|n| self.find(n).is_some()) {
+            return Err(self.err(format!(
                 "has some of the channels {} but not all",
                 names.join(", ")
             )));
@@ -402,41 +444,36 @@ pub fn read_exr(path: &Path) -> Result<RgbImage> {
             v.iter()
                 .position(|p| !(p.is_finite() && p.min_element() >= 0.0))
         }) {
-            let (x, y) = at(i);
-            return Err(err(format!(
+            let (x, y) = self.at(i);
+            return Err(self.err(format!(
                 "the {what} of pixel ({x}, {y}) is not a finite non-negative number"
             )));
         }
         Ok(v)
-    };
-    let variance = variances(VARIANCE_CHANNELS, "variance")?;
-    let estimated_variance = variances(ESTIMATE_CHANNELS, "estimated variance")?;
-    let samples = match find("samples") {
-        None => None,
-        Some(FlatSamples::U32(v)) => Some(v.clone()),
-        Some(other) => {
-            let v: Vec<f32> = other.values_as_f32().collect();
-            if let Some(i) = v
-                .iter()
-                .position(|&c| !(c >= 0.0 && c <= u32::MAX as f32 && c.fract() == 0.0))
-            {
-                let (x, y) = at(i);
-                return Err(err(format!(
-                    "the sample count of pixel ({x}, {y}) is not a whole number"
-                )));
+    }
+
+    /// The `samples` channel's counts, if the layer has it: an error where a count stored as a
+    /// float is not a whole number a u32 holds.
+    fn samples(&self) -> Result<Option<Vec<u32>>> {
+        use exr_prelude::FlatSamples;
+        Ok(match self.find("samples") {
+            None => None,
+            Some(FlatSamples::U32(v)) => Some(v.clone()),
+            Some(other) => {
+                let v: Vec<f32> = other.values_as_f32().collect();
+                if let Some(i) = v
+                    .iter()
+                    .position(|&c| !(c >= 0.0 && c <= u32::MAX as f32 && c.fract() == 0.0))
+                {
+                    let (x, y) = self.at(i);
+                    return Err(self.err(format!(
+                        "the sample count of pixel ({x}, {y}) is not a whole number"
+                    )));
+                }
+                Some(v.iter().map(|&c| c as u32).collect())
             }
-            Some(v.iter().map(|&c| c as u32).collect())
-        }
-    };
-    Ok(RgbImage {
-        width: width as u32,
-        height: height as u32,
-        pixels,
-        variance,
-        samples,
-        estimated_variance,
-        metadata,
-    })
+        })
+    }
 }
 
 #[cfg(test)]

@@ -81,75 +81,10 @@ pub fn chi2_directions_binned(
     n: usize,
     b: &Chi2Binning,
 ) -> (Chi2Result, Vec<f64>, Vec<f64>) {
-    let frame = Frame::from_normal(b.pole);
-    let nz = b.z_bins;
-    let np = b.phi_bins;
-    let z_lo = b.z_lo as f64;
-    let dz = (1.0 - z_lo) / nz as f64;
-    let dphi = 2.0 * PI / np as f64;
-    // bins: nz*np regular, then "below z_lo", then "failed"
-    let below = nz * np;
-    let failed_bin = below + 1;
-    let mut observed = vec![0f64; nz * np + 2];
-    for _ in 0..n {
-        match sample(points()) {
-            None => observed[failed_bin] += 1.0,
-            Some(w) => {
-                let l = frame.to_local(w.normalize());
-                let z = l.z.clamp(-1.0, 1.0) as f64;
-                if z < z_lo {
-                    observed[below] += 1.0;
-                } else {
-                    let mut phi = (l.y as f64).atan2(l.x as f64);
-                    if phi < 0.0 {
-                        phi += 2.0 * PI;
-                    }
-                    let iz = (((z - z_lo) / dz) as usize).min(nz - 1);
-                    let ip = ((phi / dphi) as usize).min(np - 1);
-                    observed[iz * np + ip] += 1.0;
-                }
-            }
-        }
-    }
-    // Expected mass per bin by a K×K midpoint rule in (z, φ).
-    let k = b.quadrature.max(1);
-    let dir = |z: f64, phi: f64| {
-        let r = (1.0 - z * z).max(0.0).sqrt();
-        frame.to_world(Vec3::new(
-            (r * phi.cos()) as f32,
-            (r * phi.sin()) as f32,
-            z as f32,
-        ))
-    };
-    let integrate = |z0: f64, z1: f64, p0: f64, p1: f64, kz: usize, kp: usize| {
-        let (hz, hp) = ((z1 - z0) / kz as f64, (p1 - p0) / kp as f64);
-        let mut s = 0.0;
-        for a in 0..kz {
-            for c in 0..kp {
-                let z = z0 + (a as f64 + 0.5) * hz;
-                let phi = p0 + (c as f64 + 0.5) * hp;
-                s += pdf(dir(z, phi)) as f64;
-            }
-        }
-        s * hz * hp
-    };
-    let mut expected = vec![0f64; nz * np + 2];
-    for iz in 0..nz {
-        for ip in 0..np {
-            let z0 = z_lo + iz as f64 * dz;
-            let p0 = ip as f64 * dphi;
-            expected[iz * np + ip] = integrate(z0, z0 + dz, p0, p0 + dphi, k, k);
-        }
-    }
-    // Below z_lo: intervals that double in width away from z_lo, so a pdf that is still steep
-    // just below z_lo (a sharp lobe) is integrated as finely as the bins above it.
-    let (mut hi, mut width) = (z_lo, dz);
-    while hi > -1.0 {
-        let lo = (hi - width).max(-1.0);
-        expected[below] += integrate(lo, hi, 0.0, 2.0 * PI, k, np * k);
-        hi = lo;
-        width *= 2.0;
-    }
+    let bins = Bins::new(b);
+    let (below, failed_bin) = (bins.below(), bins.below() + 1);
+    let mut observed = bins.observed(&mut sample, &mut points, n);
+    let mut expected = bins.expected_mass(pdf, b.quadrature.max(1));
     let total: f64 = expected[..failed_bin].iter().sum();
     expected[failed_bin] = (1.0 - total).max(0.0);
     for e in &mut expected {
@@ -171,6 +106,113 @@ pub fn chi2_directions_binned(
     observed.truncate(below);
     expected.truncate(below);
     (result, observed, expected)
+}
+
+/// The bins of a [`Chi2Binning`] about its pole: `nz × np` regular ones, `dz` in `cosθ` from
+/// `z_lo` by `dphi` in `φ`, then one for `cosθ < z_lo` ([`Bins::below`]) and one for failures.
+struct Bins {
+    frame: Frame,
+    nz: usize,
+    np: usize,
+    z_lo: f64,
+    dz: f64,
+    dphi: f64,
+}
+
+impl Bins {
+    fn new(b: &Chi2Binning) -> Bins {
+        let z_lo = b.z_lo as f64;
+        Bins {
+            frame: Frame::from_normal(b.pole),
+            nz: b.z_bins,
+            np: b.phi_bins,
+            z_lo,
+            dz: (1.0 - z_lo) / b.z_bins as f64,
+            dphi: 2.0 * PI / b.phi_bins as f64,
+        }
+    }
+
+    /// The index of the bin of `cosθ < z_lo`; the failed samples' bin follows it.
+    fn below(&self) -> usize {
+        self.nz * self.np
+    }
+
+    /// The count in every bin of `n` directions `sample(points())`.
+    fn observed(
+        &self,
+        mut sample: impl FnMut(Vec2) -> Option<Vec3>,
+        mut points: impl FnMut() -> Vec2,
+        n: usize,
+    ) -> Vec<f64> {
+        let (nz, np, z_lo) = (self.nz, self.np, self.z_lo);
+        let below = self.below();
+        let mut observed = vec![0f64; nz * np + 2];
+        for _ in 0..n {
+            match sample(points()) {
+                None => observed[below + 1] += 1.0,
+                Some(w) => {
+                    let l = self.frame.to_local(w.normalize());
+                    let z = l.z.clamp(-1.0, 1.0) as f64;
+                    if z < z_lo {
+                        observed[below] += 1.0;
+                    } else {
+                        let mut phi = (l.y as f64).atan2(l.x as f64);
+                        if phi < 0.0 {
+                            phi += 2.0 * PI;
+                        }
+                        let iz = (((z - z_lo) / self.dz) as usize).min(nz - 1);
+                        let ip = ((phi / self.dphi) as usize).min(np - 1);
+                        observed[iz * np + ip] += 1.0;
+                    }
+                }
+            }
+        }
+        observed
+    }
+
+    /// `∫ pdf dω` over every bin but the failed one (left 0), by a `k×k` midpoint rule in
+    /// `(z, φ)` per regular bin.
+    fn expected_mass(&self, pdf: impl Fn(Vec3) -> f32, k: usize) -> Vec<f64> {
+        let (nz, np, z_lo, dz, dphi) = (self.nz, self.np, self.z_lo, self.dz, self.dphi);
+        let dir = |z: f64, phi: f64| {
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            self.frame.to_world(Vec3::new(
+                (r * phi.cos()) as f32,
+                (r * phi.sin()) as f32,
+                z as f32,
+            ))
+        };
+        let integrate = |z0: f64, z1: f64, p0: f64, p1: f64, kz: usize, kp: usize| {
+            let (hz, hp) = ((z1 - z0) / kz as f64, (p1 - p0) / kp as f64);
+            let mut s = 0.0;
+            for a in 0..kz {
+                for c in 0..kp {
+                    let z = z0 + (a as f64 + 0.5) * hz;
+                    let phi = p0 + (c as f64 + 0.5) * hp;
+                    s += pdf(dir(z, phi)) as f64;
+                }
+            }
+            s * hz * hp
+        };
+        let mut expected = vec![0f64; nz * np + 2];
+        for iz in 0..nz {
+            for ip in 0..np {
+                let z0 = z_lo + iz as f64 * dz;
+                let p0 = ip as f64 * dphi;
+                expected[iz * np + ip] = integrate(z0, z0 + dz, p0, p0 + dphi, k, k);
+            }
+        }
+        // Below z_lo: intervals that double in width away from z_lo, so a pdf that is still
+        // steep just below z_lo (a sharp lobe) is integrated as finely as the bins above it.
+        let (mut hi, mut width) = (z_lo, dz);
+        while hi > -1.0 {
+            let lo = (hi - width).max(-1.0);
+            expected[self.below()] += integrate(lo, hi, 0.0, 2.0 * PI, k, np * k);
+            hi = lo;
+            width *= 2.0;
+        }
+        expected
+    }
 }
 
 /// Pearson's statistic over bins, pooling bins expecting < 5 (smallest first); a bin that

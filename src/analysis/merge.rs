@@ -93,6 +93,25 @@ fn check_counts(image: &RgbImage, meta: &RenderMetadata) -> std::result::Result<
 
 /// Merge `inputs` into one image and its metadata.
 pub fn merge(inputs: &[MergeInput]) -> Result<(RgbImage, RenderMetadata)> {
+    check_inputs(inputs)?;
+    let first = &inputs[0].meta;
+    let merged = merge_pixels(inputs)?;
+    let meta = merged_metadata(inputs, &merged);
+    let image = RgbImage {
+        width: first.width,
+        height: first.height,
+        pixels: merged.pixels,
+        variance: merged.variance,
+        samples: Some(merged.samples),
+        estimated_variance: merged.estimated,
+        metadata: meta.to_attributes(),
+    };
+    Ok((image, meta))
+}
+
+/// Whether `inputs` can merge: at least two, all of one scene and settings, none adaptive or
+/// itself a merge, and no two holding the same samples of one seed. The error names the input.
+fn check_inputs(inputs: &[MergeInput]) -> Result<()> {
     if inputs.len() < 2 {
         return Err(Error::Settings("merge needs at least two images".into()));
     }
@@ -101,29 +120,8 @@ pub fn merge(inputs: &[MergeInput]) -> Result<(RgbImage, RenderMetadata)> {
     let mut ranges: Vec<(u64, u64, u64)> = Vec::new();
     for (i, input) in inputs.iter().enumerate() {
         let m = &input.meta;
-        let differs = [
-            ("scene_hash", m.scene_hash != first.scene_hash),
-            ("size", (m.width, m.height) != (first.width, first.height)),
-            ("max_depth", m.max_depth != first.max_depth),
-            ("sampler", m.strategy.sampler != first.strategy.sampler),
-            (
-                "directions",
-                m.strategy.directions != first.strategy.directions,
-            ),
-            ("lights", m.strategy.lights != first.strategy.lights),
-            (
-                "light_points",
-                m.strategy.light_points != first.strategy.light_points,
-            ),
-            (
-                "light_choice",
-                m.strategy.light_choice != first.strategy.light_choice,
-            ),
-        ];
-        if let Some((key, _)) = differs.iter().find(|(_, d)| *d) {
-            let a = m.to_attributes();
-            let b = first.to_attributes();
-            let show = |x: &std::collections::BTreeMap<String, String>| match *key {
+        if let Some(key) = differing_setting(m, first) {
+            let show = |x: &std::collections::BTreeMap<String, String>| match key {
                 "size" => format!("{}×{}", x["width"], x["height"]),
                 k => x[k].clone(),
             };
@@ -131,9 +129,9 @@ pub fn merge(inputs: &[MergeInput]) -> Result<(RgbImage, RenderMetadata)> {
                 i,
                 format!(
                     "{key} is {} but {} has {}: only renders of the same scene and settings merge",
-                    show(&a),
+                    show(&m.to_attributes()),
                     inputs[0].path.display(),
-                    show(&b)
+                    show(&first.to_attributes())
                 ),
             ));
         }
@@ -162,17 +160,57 @@ pub fn merge(inputs: &[MergeInput]) -> Result<(RgbImage, RenderMetadata)> {
         }
         ranges.push((seed, start, start + n));
     }
-    let total: u64 = inputs.iter().map(|i| i.meta.spp).sum();
+    Ok(())
+}
+
+/// The first setting (by its metadata key, or `size`) in which `m` differs from `first`, the
+/// settings that must agree for two renders to merge.
+fn differing_setting(m: &RenderMetadata, first: &RenderMetadata) -> Option<&'static str> {
+    let differs = [
+        ("scene_hash", m.scene_hash != first.scene_hash),
+        ("size", (m.width, m.height) != (first.width, first.height)),
+        ("max_depth", m.max_depth != first.max_depth),
+        ("sampler", m.strategy.sampler != first.strategy.sampler),
+        (
+            "directions",
+            m.strategy.directions != first.strategy.directions,
+        ),
+        ("lights", m.strategy.lights != first.strategy.lights),
+        (
+            "light_points",
+            m.strategy.light_points != first.strategy.light_points,
+        ),
+        (
+            "light_choice",
+            m.strategy.light_choice != first.strategy.light_choice,
+        ),
+    ];
+    differs.iter().find(|(_, d)| *d).map(|(key, _)| *key)
+}
+
+/// The merged pixels: means, variances of the mean and estimated variances (where every input
+/// has them) and per-pixel sample counts.
+struct MergedPixels {
+    pixels: Vec<Vec3>,
+    variance: Option<Vec<Vec3>>,
+    estimated: Option<Vec<Vec3>>,
+    samples: Vec<u32>,
+}
+
+/// Samples in pixel `p` of `input`: its `samples` channel, else the metadata's spp.
+fn count(input: &MergeInput, p: usize) -> u64 {
+    input
+        .image
+        .samples
+        .as_ref()
+        .map_or(input.meta.spp, |s| s[p] as u64)
+}
+
+/// Each pixel's inputs combined, weighted by their sample counts (see the module doc); an error
+/// where a pixel would hold more samples than a u32 counts.
+fn merge_pixels(inputs: &[MergeInput]) -> Result<MergedPixels> {
     let with_var = inputs.iter().all(|i| i.image.variance.is_some());
     let px = inputs[0].image.pixels.len();
-    // samples in pixel p of input i: its `samples` channel, else the metadata's spp
-    let count = |input: &MergeInput, p: usize| -> u64 {
-        input
-            .image
-            .samples
-            .as_ref()
-            .map_or(input.meta.spp, |s| s[p] as u64)
-    };
     let mut pixels = vec![Vec3::ZERO; px];
     let mut variance = with_var.then(|| vec![Vec3::ZERO; px]);
     // the inputs' estimated variances combine as those of independent means, Σ (nᵢ/N)² vᵢ
@@ -217,6 +255,18 @@ pub fn merge(inputs: &[MergeInput]) -> Result<(RgbImage, RenderMetadata)> {
             };
         }
     }
+    Ok(MergedPixels {
+        pixels,
+        variance,
+        estimated,
+        samples,
+    })
+}
+
+/// The merge's metadata: the first input's settings with the inputs' spp, seeds, times and
+/// dropped samples summed, their files named, and the merged error estimate where there is one.
+fn merged_metadata(inputs: &[MergeInput], merged: &MergedPixels) -> RenderMetadata {
+    let first = &inputs[0].meta;
     let names: Vec<String> = inputs
         .iter()
         .map(|i| i.path.display().to_string())
@@ -224,8 +274,8 @@ pub fn merge(inputs: &[MergeInput]) -> Result<(RgbImage, RenderMetadata)> {
     let mut seeds: Vec<u64> = inputs.iter().flat_map(|i| i.meta.seeds()).collect();
     seeds.sort_unstable();
     seeds.dedup();
-    let meta = RenderMetadata {
-        spp: total,
+    RenderMetadata {
+        spp: inputs.iter().map(|i| i.meta.spp).sum(),
         seed: None,
         merged_seeds: seeds,
         first_sample: 0,
@@ -238,8 +288,8 @@ pub fn merge(inputs: &[MergeInput]) -> Result<(RgbImage, RenderMetadata)> {
         shard: None,
         requested_spp: None,
         interrupted: inputs.iter().any(|i| i.meta.interrupted),
-        estimate: estimated.as_ref().map(|v| {
-            let (mse, rel_mse) = crate::estimate::image_error(first.width, &pixels, v);
+        estimate: merged.estimated.as_ref().map(|v| {
+            let (mse, rel_mse) = crate::estimate::image_error(first.width, &merged.pixels, v);
             EstimateRecord {
                 replicates: inputs
                     .iter()
@@ -252,15 +302,5 @@ pub fn merge(inputs: &[MergeInput]) -> Result<(RgbImage, RenderMetadata)> {
         }),
         target_error: None,
         ..first.clone()
-    };
-    let image = RgbImage {
-        width: first.width,
-        height: first.height,
-        pixels,
-        variance,
-        samples: Some(samples),
-        estimated_variance: estimated,
-        metadata: meta.to_attributes(),
-    };
-    Ok((image, meta))
+    }
 }

@@ -135,17 +135,7 @@ fn draw_calibration<DB: DrawingBackend>(
 ) -> std::result::Result<(), String> {
     let e = |x: plotters::drawing::DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
     root.fill(&WHITE).map_err(e)?;
-    let all = points
-        .iter()
-        .flat_map(|p| [p.0, p.1])
-        .chain(per_sample.iter().flat_map(|p| [p.0, p.1]))
-        .filter(|v| *v > 0.0 && v.is_finite());
-    let (lo, hi) = all.fold((f64::MAX, f64::MIN), |(a, b), v| (a.min(v), b.max(v)));
-    let (lo, hi) = if lo < hi {
-        (lo / 2.0, hi * 2.0)
-    } else {
-        (1e-6, 1.0)
-    };
+    let (lo, hi) = calibration_range(points, per_sample);
     let mut chart = ChartBuilder::on(&root)
         .caption("error estimate against measured error", (FONT, 20))
         .margin(15)
@@ -166,15 +156,7 @@ fn draw_calibration<DB: DrawingBackend>(
         (1.0, BLACK.stroke_width(2)),
         (2.0, BLACK.mix(0.4).stroke_width(1)),
     ] {
-        let lines: Vec<Vec<(f64, f64)>> = if k == 1.0 {
-            vec![vec![(lo, lo), (hi, hi)]]
-        } else {
-            vec![
-                vec![(lo, lo * k), (hi / k, hi)],
-                vec![(lo * k, lo), (hi, hi / k)],
-            ]
-        };
-        for l in lines {
+        for l in factor_lines(k, (lo, hi)) {
             chart.draw_series(LineSeries::new(l, style)).map_err(e)?;
         }
     }
@@ -214,6 +196,34 @@ fn draw_calibration<DB: DrawingBackend>(
         .draw()
         .map_err(e)?;
     root.present().map_err(e)
+}
+
+/// The calibration plot's range on both axes: the positive finite values of `points` and
+/// `per_sample` with a factor 2 of margin each side (`1e-6 .. 1` where there are none).
+fn calibration_range(points: &[(f64, f64, String)], per_sample: &[(f64, f64)]) -> (f64, f64) {
+    let all = points
+        .iter()
+        .flat_map(|p| [p.0, p.1])
+        .chain(per_sample.iter().flat_map(|p| [p.0, p.1]))
+        .filter(|v| *v > 0.0 && v.is_finite());
+    let (lo, hi) = all.fold((f64::MAX, f64::MIN), |(a, b), v| (a.min(v), b.max(v)));
+    if lo < hi {
+        (lo / 2.0, hi * 2.0)
+    } else {
+        (1e-6, 1.0)
+    }
+}
+
+/// The lines `y = x` (`k` = 1), else `y = k x` and `y = x / k`, across the range `lo..hi`.
+fn factor_lines(k: f64, (lo, hi): (f64, f64)) -> Vec<Vec<(f64, f64)>> {
+    if k == 1.0 {
+        vec![vec![(lo, lo), (hi, hi)]]
+    } else {
+        vec![
+            vec![(lo, lo * k), (hi / k, hi)],
+            vec![(lo * k, lo), (hi, hi / k)],
+        ]
+    }
 }
 
 /// The log-log plot of MSE against spp as SVG text (for the HTML report).

@@ -112,76 +112,7 @@ fn draw_points<DB: DrawingBackend>(
     let (middle, bottom) = rest.split_vertically(320);
     let cells = top.split_evenly((1, panels.len().max(1)));
     for (k, (area, p)) in cells.iter().zip(panels).enumerate() {
-        let colour = PALETTE[k % PALETTE.len()];
-        let ((x0, x1), (y0, y1)) = p.warp.extent();
-        let mut chart = ChartBuilder::on(area)
-            .caption(&p.caption, (FONT, 12))
-            .margin(10)
-            .x_label_area_size(20)
-            .y_label_area_size(30)
-            .build_cartesian_2d(x0..x1, y0..y1)
-            .map_err(e)?;
-        chart
-            .configure_mesh()
-            .disable_mesh()
-            .label_style((FONT, 11))
-            .x_labels(3)
-            .y_labels(3)
-            .draw()
-            .map_err(e)?;
-        let grey = RGBColor(200, 200, 200);
-        match p.warp {
-            PointWarp::Square => {}
-            PointWarp::Triangle => {
-                let t = [(0.0, 0.0), (1.0, 0.0), (0.5, 0.866), (0.0, 0.0)];
-                chart
-                    .draw_series(LineSeries::new(t, BLACK.stroke_width(1)))
-                    .map_err(e)?;
-            }
-            _ => {
-                let circle = (0..=128).map(|i| {
-                    let a = i as f32 / 128.0 * std::f32::consts::TAU;
-                    (a.cos(), a.sin())
-                });
-                chart
-                    .draw_series(LineSeries::new(circle, BLACK.stroke_width(1)))
-                    .map_err(e)?;
-            }
-        }
-        if let Some((a, b)) = p.strata {
-            for i in 1..a {
-                let x = i as f32 / a as f32;
-                let line = warped_segment(p.warp, Vec2::new(x, 0.0), Vec2::new(x, 1.0));
-                chart.draw_series(LineSeries::new(line, grey)).map_err(e)?;
-            }
-            for j in 1..b {
-                let y = j as f32 / b as f32;
-                let line = warped_segment(p.warp, Vec2::new(0.0, y), Vec2::new(1.0, y));
-                chart.draw_series(LineSeries::new(line, grey)).map_err(e)?;
-            }
-        }
-        let (bx, by) = p.box_size;
-        let corners = [
-            Vec2::ZERO,
-            Vec2::new(bx, 0.0),
-            Vec2::new(bx, by),
-            Vec2::new(0.0, by),
-        ];
-        let outline: Vec<(f32, f32)> = (0..4)
-            .flat_map(|i| warped_segment(p.warp, corners[i], corners[(i + 1) % 4]))
-            .collect();
-        chart
-            .draw_series([Polygon::new(outline.clone(), RED.mix(0.12).filled())])
-            .map_err(e)?;
-        chart
-            .draw_series(LineSeries::new(outline, RED.stroke_width(1)))
-            .map_err(e)?;
-        chart
-            .draw_series(p.points.iter().map(|&q| {
-                let q = p.warp.picture(q);
-                Circle::new((q.x, q.y), 2, colour.filled())
-            }))
-            .map_err(e)?;
+        draw_point_panel(area, PALETTE[k % PALETTE.len()], p).map_err(e)?;
     }
     let cells = middle.split_evenly((1, panels.len().max(1)));
     for (area, p) in cells.iter().zip(panels) {
@@ -191,6 +122,90 @@ fn draw_points<DB: DrawingBackend>(
     draw_spectra(&left, panels).map_err(e)?;
     draw_discrepancy(&right, panels).map_err(e)?;
     root.present().map_err(e)
+}
+
+/// One set's points in `colour`, where its warp shows them: over the warp's domain outlined,
+/// the strata's grid (grey) and the box (red), both carried through the warp.
+fn draw_point_panel<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    colour: RGBColor,
+    p: &Panel,
+) -> DrawResult<DB> {
+    let ((x0, x1), (y0, y1)) = p.warp.extent();
+    let mut chart = ChartBuilder::on(area)
+        .caption(&p.caption, (FONT, 12))
+        .margin(10)
+        .x_label_area_size(20)
+        .y_label_area_size(30)
+        .build_cartesian_2d(x0..x1, y0..y1)?;
+    chart
+        .configure_mesh()
+        .disable_mesh()
+        .label_style((FONT, 11))
+        .x_labels(3)
+        .y_labels(3)
+        .draw()?;
+    let grey = RGBColor(200, 200, 200);
+    if let Some(outline) = domain_outline(p.warp) {
+        chart.draw_series(LineSeries::new(outline, BLACK.stroke_width(1)))?;
+    }
+    if let Some(strata) = p.strata {
+        for line in strata_lines(p.warp, strata) {
+            chart.draw_series(LineSeries::new(line, grey))?;
+        }
+    }
+    let outline = box_outline(p.warp, p.box_size);
+    chart.draw_series([Polygon::new(outline.clone(), RED.mix(0.12).filled())])?;
+    chart.draw_series(LineSeries::new(outline, RED.stroke_width(1)))?;
+    chart.draw_series(p.points.iter().map(|&q| {
+        let q = p.warp.picture(q);
+        Circle::new((q.x, q.y), 2, colour.filled())
+    }))?;
+    Ok(())
+}
+
+/// The outline of the domain a warp's picture fills: the triangle, or the unit circle (the
+/// hemisphere warps' directions seen from above); none for the square itself.
+fn domain_outline(w: PointWarp) -> Option<Vec<(f32, f32)>> {
+    match w {
+        PointWarp::Square => None,
+        PointWarp::Triangle => Some(vec![(0.0, 0.0), (1.0, 0.0), (0.5, 0.866), (0.0, 0.0)]),
+        _ => Some(
+            (0..=128)
+                .map(|i| {
+                    let a = i as f32 / 128.0 * std::f32::consts::TAU;
+                    (a.cos(), a.sin())
+                })
+                .collect(),
+        ),
+    }
+}
+
+/// The inner lines of an `a × b` strata grid of the square, carried through warp `w`.
+fn strata_lines(w: PointWarp, (a, b): (u32, u32)) -> Vec<Vec<(f32, f32)>> {
+    let mut lines = Vec::new();
+    for i in 1..a {
+        let x = i as f32 / a as f32;
+        lines.push(warped_segment(w, Vec2::new(x, 0.0), Vec2::new(x, 1.0)));
+    }
+    for j in 1..b {
+        let y = j as f32 / b as f32;
+        lines.push(warped_segment(w, Vec2::new(0.0, y), Vec2::new(1.0, y)));
+    }
+    lines
+}
+
+/// The outline of the box `[0,bx)×[0,by)`, carried through warp `w`.
+fn box_outline(w: PointWarp, (bx, by): (f32, f32)) -> Vec<(f32, f32)> {
+    let corners = [
+        Vec2::ZERO,
+        Vec2::new(bx, 0.0),
+        Vec2::new(bx, by),
+        Vec2::new(0.0, by),
+    ];
+    (0..4)
+        .flat_map(|i| warped_segment(w, corners[i], corners[(i + 1) % 4]))
+        .collect()
 }
 
 type DrawResult<DB> = std::result::Result<

@@ -125,6 +125,46 @@ impl GuideOutcome {
 
 /// Learn the guide, trace the pixel, draw both maps.
 pub fn run(req: &GuideRequest) -> Result<GuideOutcome> {
+    check_request(req)?;
+    let (scene, settings) = load_scene(req)?;
+    let (tree, stats) = learn_guide(&scene, &settings)?;
+    let (point, n) = first_hit(&scene, &settings, req.pixel)?;
+    let dtree = tree.sampling(tree.leaf_at(point));
+    let (w, h) = (req.map_width, req.map_width / 2);
+    let learned: Vec<f64> = (0..w * h)
+        .map(|k| {
+            let (i, j) = ((k % w) as f32 + 0.5, (k / w) as f32 + 0.5);
+            dtree.pdf_canonical(canonical(i, j, (w, h))) as f64
+        })
+        .collect();
+    let origin = point + n * scene.ray_epsilon;
+    let mut incident = crate::render::with_threads(req.threads, || {
+        incident_radiance(&scene, &settings, req, (origin, n))
+    })?;
+    let total_variation = total_variation(&learned, &mut incident, dtree.total() > 0.0);
+    write_density_pair(
+        &req.output,
+        (&learned, &incident),
+        (w, h),
+        ("learned guide (density)", "incident radiance, brute force"),
+        "density per unit area of the equal-area map, log scale",
+    )?;
+    Ok(GuideOutcome {
+        point,
+        total_variation,
+        tree: tree.size(),
+        point_nodes: dtree.node_count(),
+        training_seconds: stats.elapsed.as_secs_f64(),
+        written: Written {
+            path: req.output.clone(),
+            note: format!("total variation distance {total_variation:.3}"),
+        },
+    })
+}
+
+/// The checks on the request that need no scene: a guided strategy, a brute-force spp and map
+/// width in range, and a PNG output that can be written and is not the scene.
+fn check_request(req: &GuideRequest) -> Result<()> {
     if req.strategy.directions != Directions::Guided {
         return Err(Error::Settings(format!(
             "vrpt guide shows a guided strategy's guide, not {} (use --directions guided)",
@@ -144,6 +184,13 @@ pub fn run(req: &GuideRequest) -> Result<GuideOutcome> {
     }
     check_writable(&req.output)?;
     crate::image_io::check_outputs(&[("-o", &req.output)], &[("SCENE", &req.scene)])?;
+    Ok(())
+}
+
+/// The scene and the settings of the render whose guide is learned (the scene's, overridden by
+/// the request's); an error where the output would overwrite a file of the scene or the pixel
+/// lies outside the image.
+fn load_scene(req: &GuideRequest) -> Result<(Scene, RenderSettings)> {
     let scene = scene::load(&req.scene)?;
     let read: Vec<crate::image_io::NamedPath> = std::iter::once(scene.source.as_path())
         .chain(scene.files.iter().map(|p| p.as_path()))
@@ -168,7 +215,16 @@ pub fn run(req: &GuideRequest) -> Result<GuideOutcome> {
             settings.width, settings.height
         )));
     }
-    let (tree, stats) = learn_guide(&scene, &settings)?;
+    Ok((scene, settings))
+}
+
+/// The first hit of the camera ray through the centre of pixel `(px, py)`, and its geometric
+/// normal turned towards the camera.
+fn first_hit(
+    scene: &Scene,
+    settings: &RenderSettings,
+    (px, py): (u32, u32),
+) -> Result<(Vec3, Vec3)> {
     let camera = Camera::new(&scene.camera, settings.width, settings.height)
         .ok_or_else(|| Error::Settings("degenerate camera".into()))?;
     let (o, d) = camera.generate_ray(UVec2::new(px, py), Vec2::splat(0.5));
@@ -178,17 +234,25 @@ pub fn run(req: &GuideRequest) -> Result<GuideOutcome> {
         .ok_or_else(|| Error::Settings(format!("the ray of pixel {px},{py} hits nothing")))?;
     let s = scene.surface(&hit);
     let n = if s.ng.dot(-d) > 0.0 { s.ng } else { -s.ng };
-    let leaf = tree.leaf_at(s.p);
-    let dtree = tree.sampling(leaf);
+    Ok((s.p, n))
+}
+
+/// The canonical `(u, v) = ((cosθ+1)/2, φ/2π)` of the point `(i, j)` of a `w`×`h` map, in
+/// texels (column `i`: φ, row `j`: cosθ from +1 at the top).
+fn canonical(i: f32, j: f32, (w, h): (u32, u32)) -> Vec2 {
+    Vec2::new(1.0 - j / h as f32, i / w as f32)
+}
+
+/// The brute-force map of incident radiance at `origin`, row by row in parallel: each texel the
+/// mean over `req.brute_spp` jittered directions of the grey radiance arriving from them, zero
+/// below the surface of normal `n`; not yet a density.
+fn incident_radiance(
+    scene: &Scene,
+    settings: &RenderSettings,
+    req: &GuideRequest,
+    (origin, n): (Vec3, Vec3),
+) -> Vec<f64> {
     let (w, h) = (req.map_width, req.map_width / 2);
-    // texel (column i: φ, row j: cosθ from +1 at the top) ↔ canonical (u, v) = (cosθ+1)/2, φ/2π
-    let canonical = |i: f32, j: f32| Vec2::new(1.0 - j / h as f32, i / w as f32);
-    let learned: Vec<f64> = (0..w * h)
-        .map(|k| {
-            let (i, j) = ((k % w) as f32 + 0.5, (k / w) as f32 + 0.5);
-            dtree.pdf_canonical(canonical(i, j)) as f64
-        })
-        .collect();
     // the incident radiance: paths one segment shorter than the render's, Phong directions, MIS
     let integrator = IntegratorSettings {
         max_depth: settings.max_depth.saturating_sub(1).max(1),
@@ -196,75 +260,58 @@ pub fn run(req: &GuideRequest) -> Result<GuideOutcome> {
         lights: crate::lights::LightStrategy::Mis,
         ..settings.integrator()
     };
-    let origin = s.p + n * scene.ray_epsilon;
-    let brute = |scene: &Scene| -> Vec<f64> {
-        (0..h)
-            .into_par_iter()
-            .flat_map_iter(|j| {
-                let mut stack = crate::accel::TraceStack::default();
-                let mut rays = RayCounts::default();
-                let mut sampler = IndependentSampler::new(req.seed ^ 0x6775_6964);
-                (0..w)
-                    .map(|i| {
-                        let mut sum = 0.0f64;
-                        for k in 0..req.brute_spp {
-                            sampler.start_pixel_sample(UVec2::new(i, j), k);
-                            let u = sampler.next_2d();
-                            let dir = canonical_to_dir(canonical(i as f32 + u.x, j as f32 + u.y));
-                            if dir.dot(n) <= 0.0 {
-                                continue;
-                            }
-                            let l = radiance(
-                                scene,
-                                (origin, dir),
-                                &mut sampler,
-                                &integrator,
-                                &mut rays,
-                                &mut stack,
-                            );
-                            if l.is_finite() {
-                                sum += ((l.x + l.y + l.z) / 3.0) as f64;
-                            }
+    (0..h)
+        .into_par_iter()
+        .flat_map_iter(|j| {
+            let mut stack = crate::accel::TraceStack::default();
+            let mut rays = RayCounts::default();
+            let mut sampler = IndependentSampler::new(req.seed ^ 0x6775_6964);
+            (0..w)
+                .map(|i| {
+                    let mut sum = 0.0f64;
+                    for k in 0..req.brute_spp {
+                        sampler.start_pixel_sample(UVec2::new(i, j), k);
+                        let u = sampler.next_2d();
+                        let c = canonical(i as f32 + u.x, j as f32 + u.y, (w, h));
+                        let dir = canonical_to_dir(c);
+                        if dir.dot(n) <= 0.0 {
+                            continue;
                         }
-                        sum / req.brute_spp as f64
-                    })
-                    .collect::<Vec<_>>()
-            })
-            .collect()
-    };
-    let mut incident = crate::render::with_threads(req.threads, || brute(&scene))?;
-    // as densities per unit area of the map: mean 1
-    let texels = (w * h) as f64;
+                        let l = radiance(
+                            scene,
+                            (origin, dir),
+                            &mut sampler,
+                            &integrator,
+                            &mut rays,
+                            &mut stack,
+                        );
+                        if l.is_finite() {
+                            sum += ((l.x + l.y + l.z) / 3.0) as f64;
+                        }
+                    }
+                    sum / req.brute_spp as f64
+                })
+                .collect::<Vec<_>>()
+        })
+        .collect()
+}
+
+/// Scale `incident` to a density per unit area of the map (mean 1) and return the total
+/// variation distance `½ Σ |p − q| ΔA` to `learned`: 1 where either map is all zero.
+fn total_variation(learned: &[f64], incident: &mut [f64], learned_nonzero: bool) -> f64 {
+    let texels = incident.len() as f64;
     let total: f64 = incident.iter().sum::<f64>() / texels;
     if total > 0.0 {
         incident.iter_mut().for_each(|v| *v /= total);
     }
-    let total_variation = if total > 0.0 && dtree.total() > 0.0 {
+    if total > 0.0 && learned_nonzero {
         0.5 * learned
             .iter()
-            .zip(&incident)
+            .zip(incident.iter())
             .map(|(p, q)| (p - q).abs())
             .sum::<f64>()
             / texels
     } else {
         1.0
-    };
-    write_density_pair(
-        &req.output,
-        (&learned, &incident),
-        (w, h),
-        ("learned guide (density)", "incident radiance, brute force"),
-        "density per unit area of the equal-area map, log scale",
-    )?;
-    Ok(GuideOutcome {
-        point: s.p,
-        total_variation,
-        tree: tree.size(),
-        point_nodes: dtree.node_count(),
-        training_seconds: stats.elapsed.as_secs_f64(),
-        written: Written {
-            path: req.output.clone(),
-            note: format!("total variation distance {total_variation:.3}"),
-        },
-    })
+    }
 }

@@ -75,39 +75,9 @@ type Warp = (
     Chi2Binning,
 );
 
-/// The warps vrpt has.
+/// The warps vrpt has, in a fixed order (each row's seed is its place in the list).
 fn warps() -> Vec<Warp> {
-    let mut v: Vec<Warp> = vec![
-        (
-            "uniform hemisphere".into(),
-            Box::new(|u| Some(sample_uniform_hemisphere(u))),
-            Box::new(|w: Vec3| {
-                if w.z > 0.0 {
-                    uniform_hemisphere_pdf()
-                } else {
-                    0.0
-                }
-            }),
-            Chi2Binning::default(),
-        ),
-        (
-            "cosine hemisphere".into(),
-            Box::new(|u| Some(sample_cosine_hemisphere(u))),
-            Box::new(|w: Vec3| cosine_hemisphere_pdf(w.z)),
-            Chi2Binning::default(),
-        ),
-    ];
-    for n in [10.0f32, 100.0] {
-        v.push((
-            format!("Phong lobe, exponent {n}"),
-            Box::new(move |u| Some(sample_phong_lobe(n, u))),
-            Box::new(move |w: Vec3| phong_lobe_pdf(n, w.z)),
-            Chi2Binning {
-                z_lo: 1e-3f32.powf(1.0 / (n + 1.0)),
-                ..Default::default()
-            },
-        ));
-    }
+    let mut v = hemisphere_warps();
     // a triangle and a rectangle in the plane z = 0, seen from above
     let p = Vec3::new(0.1, 0.2, 1.0);
     let normal = Vec3::new(0.3, 0.0, -1.0).normalize();
@@ -150,7 +120,59 @@ fn warps() -> Vec<Warp> {
             ));
         }
     }
-    // a sky with a sun: sampled by luminance × sinθ
+    v.push(environment_warp());
+    // the triangle by area (the `area` light points): uniform on the triangle, so per solid
+    // angle `dist² / (A |cos θ_light|)`; last, so that the rows before keep their seeds
+    v.push(light_warp(
+        "triangle by area".into(),
+        &[Emitter::triangle(0, tri, le)],
+        &tri,
+        LightPoints::Area,
+        (p, normal),
+    ));
+    v.push(guide_warp());
+    v
+}
+
+/// The warps of the BSDFs about +z: uniform and cosine hemispheres, Phong lobes of exponents 10
+/// and 100 (binned from where the lobe's pdf falls to 1e-3 of its peak).
+fn hemisphere_warps() -> Vec<Warp> {
+    let mut v: Vec<Warp> = vec![
+        (
+            "uniform hemisphere".into(),
+            Box::new(|u| Some(sample_uniform_hemisphere(u))),
+            Box::new(|w: Vec3| {
+                if w.z > 0.0 {
+                    uniform_hemisphere_pdf()
+                } else {
+                    0.0
+                }
+            }),
+            Chi2Binning::default(),
+        ),
+        (
+            "cosine hemisphere".into(),
+            Box::new(|u| Some(sample_cosine_hemisphere(u))),
+            Box::new(|w: Vec3| cosine_hemisphere_pdf(w.z)),
+            Chi2Binning::default(),
+        ),
+    ];
+    for n in [10.0f32, 100.0] {
+        v.push((
+            format!("Phong lobe, exponent {n}"),
+            Box::new(move |u| Some(sample_phong_lobe(n, u))),
+            Box::new(move |w: Vec3| phong_lobe_pdf(n, w.z)),
+            Chi2Binning {
+                z_lo: 1e-3f32.powf(1.0 / (n + 1.0)),
+                ..Default::default()
+            },
+        ));
+    }
+    v
+}
+
+/// The environment map's warp: a 64×32 sky with a sun, sampled by luminance × sinθ.
+fn environment_warp() -> Warp {
     let (w, h) = (64u32, 32u32);
     let sky: Vec<Vec3> = (0..w * h)
         .map(|i| {
@@ -165,7 +187,7 @@ fn warps() -> Vec<Warp> {
         .collect();
     let map = std::rc::Rc::new(EnvMap::new(w, h, &sky, 0.0, 1.0).expect("the sky is valid"));
     let (m1, m2) = (map.clone(), map);
-    v.push((
+    (
         "environment map (luminance)".into(),
         Box::new(move |u| m1.sample(u).map(|s| s.0)),
         Box::new(move |d: Vec3| m2.pdf(d)),
@@ -177,19 +199,15 @@ fn warps() -> Vec<Warp> {
             quadrature: 24,
             ..Default::default()
         },
-    ));
-    // the triangle by area (the `area` light points): uniform on the triangle, so per solid
-    // angle `dist² / (A |cos θ_light|)`; last, so that the rows before keep their seeds
-    v.push(light_warp(
-        "triangle by area".into(),
-        &[Emitter::triangle(0, tri, le)],
-        &tri,
-        LightPoints::Area,
-        (p, normal),
-    ));
+    )
+}
+
+/// The warp of a learned guide's leaf ([`trained_guide_leaf`]): hierarchical sampling of its
+/// quadtree beside its piecewise-constant pdf.
+fn guide_warp() -> Warp {
     let guide = std::rc::Rc::new(trained_guide_leaf());
     let (g1, g2) = (guide.clone(), guide);
-    v.push((
+    (
         "guide leaf (learned quadtree)".into(),
         Box::new(move |u| Some(g1.sample(u))),
         Box::new(move |d: Vec3| g2.pdf(d)),
@@ -202,8 +220,7 @@ fn warps() -> Vec<Warp> {
             quadrature: 32,
             ..Default::default()
         },
-    ));
-    v
+    )
 }
 
 /// The warp of a light's points seen from `p` (shading normal `normal`): the light sampler's

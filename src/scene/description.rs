@@ -100,106 +100,145 @@ impl Description {
     /// Parse the text of a description; the error is one line with the TOML position, and a
     /// value out of range names its line and field.
     pub fn parse(text: &str) -> Result<Description, String> {
-        let line_of = |at: usize| text[..at.min(text.len())].matches('\n').count() + 1;
-        let d: Description = toml::from_str(text).map_err(|e| {
+        let mut d: Description = toml::from_str(text).map_err(|e| {
             let msg = crate::error::clip_line(e.message().trim()).into_owned();
             match e.span() {
-                Some(span) => format!("line {}: {msg}", line_of(span.start)),
+                Some(span) => format!("line {}: {msg}", line_of(text, span.start)),
                 None => msg,
             }
         })?;
-        // "line N: camera.eye: ..." (no line for a default, which is always valid)
-        let bad = |span: std::ops::Range<usize>, field: &str, what: String| {
-            if span.is_empty() {
-                format!("{field}: {what}")
-            } else {
-                format!("line {}: {field}: {what}", line_of(span.start))
-            }
-        };
-        let coords = |v: &At<[f32; 3]>, field: &str, min: f32| -> Result<(), String> {
-            let m = MAX_MAGNITUDE;
-            match v.get_ref().iter().find(|x| !(min..=m).contains(*x)) {
-                None => Ok(()),
-                Some(x) if !x.is_finite() => {
-                    Err(bad(v.span(), field, format!("{x} is not a finite number")))
-                }
-                Some(x) => Err(bad(
-                    v.span(),
-                    field,
-                    format!("{x} is outside [{min:e}, {m:e}]"),
-                )),
-            }
-        };
         if let Some(c) = &d.camera {
-            let m = MAX_MAGNITUDE;
-            coords(&c.eye, "camera.eye", -m)?;
-            coords(&c.target, "camera.target", -m)?;
-            coords(&c.up, "camera.up", -m)?;
-            let fov = *c.fov.get_ref();
-            if !(fov > 0.0 && fov < 180.0) {
-                return Err(bad(
-                    c.fov.span(),
-                    "camera.fov",
-                    format!("{fov} is not in (0, 180) degrees"),
-                ));
-            }
+            check_camera(text, c)?;
         }
-        let mut d = d;
         if let Some(e) = &mut d.environment {
-            if let Some(r) = &e.radiance {
-                coords(r, "environment.radiance", 0.0)?;
-            }
-            match (&e.radiance, &e.map) {
-                (Some(r), Some(_)) => {
-                    return Err(bad(
-                        r.span(),
-                        "environment",
-                        "give radiance or map, not both".into(),
-                    ))
-                }
-                (None, None) => return Err("environment: give radiance or map".into()),
-                (Some(_), None) => {
-                    if let Some(k) = [("rotation", &e.rotation), ("scale", &e.scale)]
-                        .into_iter()
-                        .find(|(_, v)| v.is_some())
-                    {
-                        return Err(format!("environment.{}: only for a map", k.0));
-                    }
-                }
-                (None, Some(m)) => e.map_line = line_of(m.span().start),
-            }
-            if let Some(r) = &e.rotation {
-                if !r.get_ref().is_finite() {
-                    return Err(bad(r.span(), "environment.rotation", "not finite".into()));
-                }
-            }
-            if let Some(sc) = &e.scale {
-                let x = *sc.get_ref();
-                if !(0.0..=MAX_MAGNITUDE).contains(&x) {
-                    return Err(bad(
-                        sc.span(),
-                        "environment.scale",
-                        format!("{x} is outside [0, {MAX_MAGNITUDE:e}]"),
-                    ));
-                }
-            }
+            check_environment(text, e)?;
         }
         if let Some(r) = &d.render {
-            for (name, v, max) in [
-                ("width", r.width, MAX_SIDE),
-                ("height", r.height, MAX_SIDE),
-                ("spp", r.spp, u32::MAX),
-                ("max_depth", r.max_depth, MAX_DEPTH),
-            ] {
-                if let Some(v) = v.filter(|&v| v == 0 || v > max) {
-                    let line = key_line(text, "render", name)
-                        .map_or(String::new(), |n| format!("line {n}: "));
-                    return Err(format!("{line}render.{name}: {v} is not in 1..={max}"));
-                }
-            }
+            check_render(text, r)?;
         }
         Ok(d)
     }
+}
+
+/// The line (from 1) of byte `at` of `text`.
+fn line_of(text: &str, at: usize) -> usize {
+    text[..at.min(text.len())].matches('\n').count() + 1
+}
+
+/// The error "line N: camera.eye: ..." for the value of `field` at `span` of `text` (no line for
+/// a default, whose span is empty and which is always valid).
+fn bad(text: &str, span: std::ops::Range<usize>, field: &str, what: String) -> String {
+    if span.is_empty() {
+        format!("{field}: {what}")
+    } else {
+        format!("line {}: {field}: {what}", line_of(text, span.start))
+    }
+}
+
+/// An error unless every number of `v` is in `[min, MAX_MAGNITUDE]` (so finite).
+fn check_coords(text: &str, v: &At<[f32; 3]>, field: &str, min: f32) -> Result<(), String> {
+    let m = MAX_MAGNITUDE;
+    match v.get_ref().iter().find(|x| !(min..=m).contains(*x)) {
+        None => Ok(()),
+        Some(x) if !x.is_finite() => Err(bad(
+            text,
+            v.span(),
+            field,
+            format!("{x} is not a finite number"),
+        )),
+        Some(x) => Err(bad(
+            text,
+            v.span(),
+            field,
+            format!("{x} is outside [{min:e}, {m:e}]"),
+        )),
+    }
+}
+
+/// `[camera]`: finite points within [`MAX_MAGNITUDE`], and a field of view in (0, 180) degrees.
+fn check_camera(text: &str, c: &CameraSection) -> Result<(), String> {
+    let m = MAX_MAGNITUDE;
+    check_coords(text, &c.eye, "camera.eye", -m)?;
+    check_coords(text, &c.target, "camera.target", -m)?;
+    check_coords(text, &c.up, "camera.up", -m)?;
+    let fov = *c.fov.get_ref();
+    if !(fov > 0.0 && fov < 180.0) {
+        return Err(bad(
+            text,
+            c.fov.span(),
+            "camera.fov",
+            format!("{fov} is not in (0, 180) degrees"),
+        ));
+    }
+    Ok(())
+}
+
+/// `[environment]`: a radiance in range or a map (not both, not neither); rotation and scale only
+/// for a map, finite and in range. Sets `map_line` to the line of `map`.
+fn check_environment(text: &str, e: &mut EnvironmentSection) -> Result<(), String> {
+    if let Some(r) = &e.radiance {
+        check_coords(text, r, "environment.radiance", 0.0)?;
+    }
+    match (&e.radiance, &e.map) {
+        (Some(r), Some(_)) => {
+            return Err(bad(
+                text,
+                r.span(),
+                "environment",
+                "give radiance or map, not both".into(),
+            ))
+        }
+        (None, None) => return Err("environment: give radiance or map".into()),
+        (Some(_), None) => {
+            if let Some(k) = [("rotation", &e.rotation), ("scale", &e.scale)]
+                .into_iter()
+                .find(|(_, v)| v.is_some())
+            {
+                return Err(format!("environment.{}: only for a map", k.0));
+            }
+        }
+        (None, Some(m)) => e.map_line = line_of(text, m.span().start),
+    }
+    if let Some(r) = &e.rotation {
+        if !r.get_ref().is_finite() {
+            return Err(bad(
+                text,
+                r.span(),
+                "environment.rotation",
+                "not finite".into(),
+            ));
+        }
+    }
+    if let Some(sc) = &e.scale {
+        let x = *sc.get_ref();
+        if !(0.0..=MAX_MAGNITUDE).contains(&x) {
+            return Err(bad(
+                text,
+                sc.span(),
+                "environment.scale",
+                format!("{x} is outside [0, {MAX_MAGNITUDE:e}]"),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// `[render]`: width and height in `1..=MAX_SIDE`, spp at least 1, max depth in
+/// `1..=MAX_DEPTH`; the error names the key's line where it can be found.
+fn check_render(text: &str, r: &RenderSection) -> Result<(), String> {
+    for (name, v, max) in [
+        ("width", r.width, MAX_SIDE),
+        ("height", r.height, MAX_SIDE),
+        ("spp", r.spp, u32::MAX),
+        ("max_depth", r.max_depth, MAX_DEPTH),
+    ] {
+        if let Some(v) = v.filter(|&v| v == 0 || v > max) {
+            let line =
+                key_line(text, "render", name).map_or(String::new(), |n| format!("line {n}: "));
+            return Err(format!("{line}render.{name}: {v} is not in 1..={max}"));
+        }
+    }
+    Ok(())
 }
 
 /// The line (from 1) where `key = …` stands in `[section]`.

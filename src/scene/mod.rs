@@ -12,6 +12,8 @@ pub mod description;
 pub mod generate;
 pub mod obj;
 
+mod hash;
+
 use crate::accel::{Accel, Hit, TraceStack};
 use crate::bsdf::Bsdf;
 use crate::camera::CameraDesc;
@@ -19,10 +21,10 @@ use crate::environment::{EnvMap, Environment};
 use crate::error::{Error, Result};
 use crate::lights::{Emitter, Lights};
 use crate::material::Material;
-use crate::math::hash_words;
 use crate::texture::TextureSet;
 use description::{Description, RenderSection};
 use glam::{Vec2, Vec3};
+use hash::{content_hash, texture_hash};
 use std::path::{Path, PathBuf};
 
 /// One triangle of a mesh before the BVH is built.
@@ -118,45 +120,11 @@ impl Scene {
         options: SceneOptions,
         mut warnings: Vec<String>,
     ) -> Result<Scene> {
-        if mesh.triangles.is_empty() {
-            return Err(Error::Scene {
-                path: source,
-                message: "the scene has no (non-degenerate) faces".into(),
-            });
-        }
-        if let Some(t) = mesh
-            .triangles
-            .iter()
-            .find(|t| t.material as usize >= materials.len())
-        {
-            return Err(Error::Scene {
-                path: source,
-                message: format!("material index {} out of range", t.material),
-            });
-        }
+        check_mesh(&source, &mesh, materials.len())?;
         let positions: Vec<[Vec3; 3]> = mesh.triangles.iter().map(|t| t.p).collect();
         let accel = Accel::build(&positions);
-        let mut lo = Vec3::splat(f32::INFINITY);
-        let mut hi = Vec3::splat(f32::NEG_INFINITY);
-        for p in positions.iter().flatten() {
-            lo = lo.min(*p);
-            hi = hi.max(*p);
-        }
-        let shading: Vec<TriShading> = accel
-            .order
-            .iter()
-            .map(|&i| {
-                let t = &mesh.triangles[i as usize];
-                let ng = (t.p[1] - t.p[0]).cross(t.p[2] - t.p[0]).normalize_or_zero();
-                let normals = t.normals.map_or([ng; 3], |n| n.map(|v| v.normalize()));
-                TriShading {
-                    normals,
-                    ng,
-                    uvs: t.uvs.unwrap_or([Vec2::ZERO; 3]),
-                    material: t.material,
-                }
-            })
-            .collect();
+        let (lo, hi) = bounds(&positions);
+        let shading = shading_in_bvh_order(&accel, &mesh);
         let has_emitters = shading
             .iter()
             .any(|s| materials[s.material as usize].is_emissive());
@@ -169,15 +137,7 @@ impl Scene {
             }
         });
         let radius = 0.5 * (hi - lo).length();
-        let emitters = shading
-            .iter()
-            .enumerate()
-            .filter(|(_, s)| materials[s.material as usize].is_emissive())
-            .map(|(prim, s)| {
-                let emission = materials[s.material as usize].emission;
-                Emitter::triangle(prim as u32, accel.vertices(prim as u32), emission)
-            })
-            .collect();
+        let emitters = emitters_of(&accel, &shading, &materials);
         let camera = options.camera.unwrap_or_else(|| frame_bounds(lo, hi));
         let mut hash = content_hash(&mesh, &materials, &camera, &environment);
         if !options.textures.textures.is_empty() {
@@ -375,35 +335,70 @@ impl Scene {
     }
 }
 
-/// Hash of the scene's content, in input order: every float by its bits.
-fn content_hash(
-    mesh: &Mesh,
-    materials: &[Material],
-    camera: &CameraDesc,
-    env: &Environment,
-) -> u64 {
-    fn put(words: &mut Vec<u64>, vs: &[Vec3]) {
-        for v in vs {
-            words.extend(v.to_array().map(|x| x.to_bits() as u64));
-        }
+/// An error unless `mesh` has a triangle and every triangle's material is one of `materials`
+/// (`source` names the scene).
+fn check_mesh(source: &Path, mesh: &Mesh, materials: usize) -> Result<()> {
+    if mesh.triangles.is_empty() {
+        return Err(Error::Scene {
+            path: source.to_path_buf(),
+            message: "the scene has no (non-degenerate) faces".into(),
+        });
     }
-    let mut w: Vec<u64> = Vec::with_capacity(mesh.triangles.len() * 20 + 64);
-    for t in &mesh.triangles {
-        put(&mut w, &t.p);
-        if let Some(n) = &t.normals {
-            put(&mut w, n);
-        }
-        w.push(t.material as u64);
+    if let Some(t) = mesh
+        .triangles
+        .iter()
+        .find(|t| t.material as usize >= materials)
+    {
+        return Err(Error::Scene {
+            path: source.to_path_buf(),
+            message: format!("material index {} out of range", t.material),
+        });
     }
-    for m in materials {
-        put(&mut w, &[m.kd(), m.ks(), m.emission]);
-        w.push(m.exponent().to_bits() as u64);
+    Ok(())
+}
+
+/// The corners `(lo, hi)` of the bounding box of the triangles' vertices.
+fn bounds(positions: &[[Vec3; 3]]) -> (Vec3, Vec3) {
+    let mut lo = Vec3::splat(f32::INFINITY);
+    let mut hi = Vec3::splat(f32::NEG_INFINITY);
+    for p in positions.iter().flatten() {
+        lo = lo.min(*p);
+        hi = hi.max(*p);
     }
-    put(&mut w, &[camera.eye, camera.target, camera.up]);
-    // a constant environment's three words stand where they always stood: old hashes hold
-    w.extend(env.hash_words());
-    w.push(camera.fov_deg.to_bits() as u64);
-    hash_words(&w)
+    (lo, hi)
+}
+
+/// The shading data of the mesh's triangles in the BVH's order: the unit geometric normal by
+/// winding, the unit vertex normals (the geometric one where the file has none) and the UVs.
+fn shading_in_bvh_order(accel: &Accel, mesh: &Mesh) -> Vec<TriShading> {
+    accel
+        .order
+        .iter()
+        .map(|&i| {
+            let t = &mesh.triangles[i as usize];
+            let ng = (t.p[1] - t.p[0]).cross(t.p[2] - t.p[0]).normalize_or_zero();
+            let normals = t.normals.map_or([ng; 3], |n| n.map(|v| v.normalize()));
+            TriShading {
+                normals,
+                ng,
+                uvs: t.uvs.unwrap_or([Vec2::ZERO; 3]),
+                material: t.material,
+            }
+        })
+        .collect()
+}
+
+/// An emitter for each triangle of an emissive material, by its primitive index in BVH order.
+fn emitters_of(accel: &Accel, shading: &[TriShading], materials: &[Material]) -> Vec<Emitter> {
+    shading
+        .iter()
+        .enumerate()
+        .filter(|(_, s)| materials[s.material as usize].is_emissive())
+        .map(|(prim, s)| {
+            let emission = materials[s.material as usize].emission;
+            Emitter::triangle(prim as u32, accel.vertices(prim as u32), emission)
+        })
+        .collect()
 }
 
 /// A camera looking at the bounding box from +z, far enough back to see all of it at 40°.
@@ -516,53 +511,4 @@ fn environment(e: &description::EnvironmentSection, toml: &Path) -> Result<Envir
     EnvMap::new(img.width, img.height, &img.pixels, rotation, scale)
         .map(Environment::Map)
         .map_err(|m| err(format!("{}: {m}", file.display())))
-}
-
-/// `hash` extended by what textures add to the image: every triangle's texture coordinates,
-/// the materials' maps, and the texels (only for scenes with textures, so the hash of a scene
-/// without them is what it always was).
-fn texture_hash(hash: u64, mesh: &Mesh, materials: &[Material], textures: &TextureSet) -> u64 {
-    // streamed: a buffer of the words took 32 bytes per texel
-    let mut w = crate::math::WordHash::default();
-    w.push(hash);
-    let f = |x: f32| x.to_bits() as u64;
-    for t in &mesh.triangles {
-        if let Some(uv) = &t.uvs {
-            w.extend(uv.iter().flat_map(|v| [f(v.x), f(v.y)]));
-        }
-    }
-    for m in materials {
-        let maps = &m.maps;
-        let refs = [
-            maps.kd,
-            maps.ks,
-            maps.ns,
-            maps.opacity,
-            maps.normal,
-            maps.bump.map(|b| b.0),
-        ];
-        for r in refs {
-            match r {
-                Some(r) => w.extend([
-                    r.index as u64,
-                    f(r.scale.x),
-                    f(r.scale.y),
-                    f(r.offset.x),
-                    f(r.offset.y),
-                ]),
-                None => w.push(u64::MAX),
-            }
-        }
-        w.push(maps.bump.map_or(0, |b| f(b.1)));
-    }
-    for t in &textures.textures {
-        let (tw, th) = t.size();
-        w.extend([tw as u64, th as u64]);
-        for y in 0..th as i64 {
-            for x in 0..tw as i64 {
-                w.extend(t.texel(x, y).to_array().map(f));
-            }
-        }
-    }
-    w.finish()
 }

@@ -35,9 +35,47 @@ pub fn load_obj(path: &Path) -> Result<(Mesh, Vec<Material>, TextureSet, Vec<Str
         message,
     };
     check_obj_text(&text).map_err(obj_error)?;
-    let mtl_path = mtllib_path(path, &text);
+    let map_lines = read_mtl_maps(path, &text, &mut warnings)?;
+    let (models, materials) =
+        tobj::load_obj(path, &options).map_err(|e| obj_error(e.to_string()))?;
+    let mut mats = convert_materials(path, &text, materials, &mut warnings)?;
+    warn_unknown_materials(path, &text, &mats, &mut warnings);
+    let fallback = mats.len() as u32;
+    let mut used_fallback = false;
+
+    let mut triangles = Vec::new();
+    let mut degenerate = 0usize;
+    for model in &models {
+        let material = match model.mesh.material_id {
+            Some(id) if id < mats.len() => id as u32,
+            _ => {
+                used_fallback = true;
+                fallback
+            }
+        };
+        degenerate += mesh_triangles(path, &model.mesh, material, &mut triangles)?;
+    }
+    if degenerate > 0 {
+        warnings.push(format!(
+            "{}: skipped {degenerate} degenerate (zero-area) triangles",
+            path.display()
+        ));
+    }
+    if used_fallback {
+        mats.push(Material::default_grey("default-grey"));
+    }
+    let textures = attach_maps(&mut mats, &map_lines)?;
+    Ok((Mesh { triangles }, mats, textures, warnings))
+}
+
+/// The texture statements of every MTL the OBJ `text` names (`mtllib`) that exists, each with
+/// its MTL's path; a warning per MTL that names the statements and options it ignores.
+fn read_mtl_maps(
+    path: &Path,
+    text: &str,
+    warnings: &mut Vec<String>,
+) -> Result<Vec<(PathBuf, MapLine)>> {
     let folder = path.parent().unwrap_or(Path::new("."));
-    // every MTL's texture statements, with the file they stand in
     let mut map_lines: Vec<(PathBuf, MapLine)> = Vec::new();
     for name in text
         .lines()
@@ -66,9 +104,18 @@ pub fn load_obj(path: &Path) -> Result<(Mesh, Vec<Material>, TextureSet, Vec<Str
             map_lines.extend(maps.into_iter().map(|m| (p.clone(), m)));
         }
     }
-    let (models, materials) =
-        tobj::load_obj(path, &options).map_err(|e| obj_error(e.to_string()))?;
+    Ok(map_lines)
+}
 
+/// vrpt's materials from tobj's reading of the MTL: none (with a warning) where the MTL file is
+/// missing, an error where it is malformed, a warning for each material scaled to conserve energy.
+fn convert_materials(
+    path: &Path,
+    text: &str,
+    materials: std::result::Result<Vec<tobj::Material>, tobj::LoadError>,
+    warnings: &mut Vec<String>,
+) -> Result<Vec<Material>> {
+    let mtl_path = mtllib_path(path, text);
     let mut mats: Vec<Material> = Vec::new();
     match materials {
         Ok(list) => {
@@ -98,7 +145,11 @@ pub fn load_obj(path: &Path) -> Result<(Mesh, Vec<Material>, TextureSet, Vec<Str
             })
         }
     }
-    // Names used by `usemtl` that no MTL defines: warn once per name.
+    Ok(mats)
+}
+
+/// Warn once per name used by `usemtl` in the OBJ `text` that no material in `mats` has.
+fn warn_unknown_materials(path: &Path, text: &str, mats: &[Material], warnings: &mut Vec<String>) {
     let known: BTreeSet<&str> = mats.iter().map(|m| m.name.as_str()).collect();
     let unknown: BTreeSet<&str> = text
         .lines()
@@ -113,79 +164,66 @@ pub fn load_obj(path: &Path) -> Result<(Mesh, Vec<Material>, TextureSet, Vec<Str
             clip(n)
         ));
     }
-    let fallback = mats.len() as u32;
-    let mut used_fallback = false;
+}
 
-    let mut triangles = Vec::new();
+/// Push the triangles of one tobj mesh, all of `material`, onto `triangles`, with their vertex
+/// normals (where all three are finite and non-zero) and texture coordinates where the mesh has
+/// them. Returns how many zero-area triangles it skipped; an error for a non-finite position.
+fn mesh_triangles(
+    path: &Path,
+    mesh: &tobj::Mesh,
+    material: u32,
+    triangles: &mut Vec<MeshTriangle>,
+) -> Result<usize> {
     let mut degenerate = 0usize;
-    for model in &models {
-        let mesh = &model.mesh;
-        let material = match mesh.material_id {
-            Some(id) if id < mats.len() => id as u32,
-            _ => {
-                used_fallback = true;
-                fallback
-            }
-        };
-        let pos = |i: u32| {
-            let i = i as usize * 3;
-            Vec3::new(
-                mesh.positions[i],
-                mesh.positions[i + 1],
-                mesh.positions[i + 2],
-            )
-        };
-        let has_normals = mesh.normals.len() == mesh.positions.len();
-        let has_uvs =
-            !mesh.texcoords.is_empty() && mesh.texcoords.len() / 2 == mesh.positions.len() / 3;
-        let uv = |i: u32| {
-            let i = i as usize * 2;
-            Vec2::new(mesh.texcoords[i], mesh.texcoords[i + 1])
-        };
-        let nrm = |i: u32| {
-            let i = i as usize * 3;
-            Vec3::new(mesh.normals[i], mesh.normals[i + 1], mesh.normals[i + 2])
-        };
-        for f in mesh.indices.chunks_exact(3) {
-            let p = [pos(f[0]), pos(f[1]), pos(f[2])];
-            if !p.iter().all(|v| v.is_finite()) {
-                return Err(Error::Obj {
-                    path: path.to_path_buf(),
-                    message: "a vertex position is not a finite number".into(),
-                });
-            }
-            if (p[1] - p[0]).cross(p[2] - p[0]).length_squared() == 0.0 {
-                degenerate += 1;
-                continue;
-            }
-            let normals = if has_normals {
-                let n = [nrm(f[0]), nrm(f[1]), nrm(f[2])];
-                n.iter()
-                    .all(|v| v.is_finite() && v.length_squared() > 0.0)
-                    .then_some(n)
-            } else {
-                None
-            };
-            let uvs = has_uvs.then(|| [uv(f[0]), uv(f[1]), uv(f[2])]);
-            triangles.push(MeshTriangle {
-                p,
-                normals,
-                uvs,
-                material,
+    let pos = |i: u32| {
+        let i = i as usize * 3;
+        Vec3::new(
+            mesh.positions[i],
+            mesh.positions[i + 1],
+            mesh.positions[i + 2],
+        )
+    };
+    let has_normals = mesh.normals.len() == mesh.positions.len();
+    let has_uvs =
+        !mesh.texcoords.is_empty() && mesh.texcoords.len() / 2 == mesh.positions.len() / 3;
+    let uv = |i: u32| {
+        let i = i as usize * 2;
+        Vec2::new(mesh.texcoords[i], mesh.texcoords[i + 1])
+    };
+    let nrm = |i: u32| {
+        let i = i as usize * 3;
+        Vec3::new(mesh.normals[i], mesh.normals[i + 1], mesh.normals[i + 2])
+    };
+    for f in mesh.indices.chunks_exact(3) {
+        let p = [pos(f[0]), pos(f[1]), pos(f[2])];
+        if !p.iter().all(|v| v.is_finite()) {
+            return Err(Error::Obj {
+                path: path.to_path_buf(),
+                message: "a vertex position is not a finite number".into(),
             });
         }
+        if (p[1] - p[0]).cross(p[2] - p[0]).length_squared() == 0.0 {
+            degenerate += 1;
+            continue;
+        }
+        let normals = if has_normals {
+            let n = [nrm(f[0]), nrm(f[1]), nrm(f[2])];
+            n.iter()
+                .all(|v| v.is_finite() && v.length_squared() > 0.0)
+                .then_some(n)
+        } else {
+            None
+        };
+        let uvs = has_uvs.then(|| [uv(f[0]), uv(f[1]), uv(f[2])]);
+        triangles.push(MeshTriangle {
+            p,
+            normals,
+            uvs,
+            material,
+        });
     }
-    if degenerate > 0 {
-        warnings.push(format!(
-            "{}: skipped {degenerate} degenerate (zero-area) triangles",
-            path.display()
-        ));
-    }
-    if used_fallback {
-        mats.push(Material::default_grey("default-grey"));
-    }
-    let textures = attach_maps(&mut mats, &map_lines)?;
-    Ok((Mesh { triangles }, mats, textures, warnings))
+    Ok(degenerate)
 }
 
 fn convert_material(m: &tobj::Material) -> (Material, bool) {
@@ -457,7 +495,6 @@ pub fn parse_maps(
             }
             continue;
         }
-        let at = |what: String| format!("line {}: {tag}: {what}", no + 1);
         let rest: Vec<&str> = words.collect();
         let mut m = MapLine {
             material: material.clone(),
@@ -469,58 +506,71 @@ pub fn parse_maps(
             bump_mult: 1.0,
             line: no + 1,
         };
-        let number = |w: &str| -> std::result::Result<f32, String> {
-            match w.parse::<f32>() {
-                Ok(x) if x.is_finite() => Ok(x),
-                _ => Err(at(format!("'{}' is not a finite number", clip(w)))),
-            }
-        };
-        let mut k = 0;
-        while k < rest.len() && rest[k].starts_with('-') && rest[k].parse::<f32>().is_err() {
-            let opt = rest[k];
-            k += 1;
-            let Some(arity) = option_arity(opt) else {
-                ignored.insert(opt.to_string());
-                // an unknown option: skip the numbers after it
-                while k < rest.len() && rest[k].parse::<f32>().is_ok() {
-                    k += 1;
-                }
-                continue;
-            };
-            let numeric = matches!(opt, "-s" | "-o" | "-t" | "-mm" | "-bm" | "-boost");
-            let mut values = Vec::new();
-            while values.len() < arity && k < rest.len() {
-                if numeric && rest[k].parse::<f32>().is_err() {
-                    break;
-                }
-                values.push(rest[k]);
-                k += 1;
-            }
-            if values.is_empty() {
-                return Err(at(format!("{opt} needs a value")));
-            }
-            match opt {
-                "-s" | "-o" => {
-                    let default = if opt == "-s" { 1.0 } else { 0.0 };
-                    let u = number(values[0])?;
-                    let v = values.get(1).map_or(Ok(default), |w| number(w))?;
-                    if opt == "-s" {
-                        m.scale = Vec2::new(u, v);
-                    } else {
-                        m.offset = Vec2::new(u, v);
-                    }
-                }
-                "-bm" => m.bump_mult = number(values[0])?,
-                _ => {
-                    ignored.insert(opt.to_string());
-                }
-            }
-        }
+        let k = parse_map_options(&rest, &mut m, ignored)?;
         m.file = rest[k..].join(" ");
         if m.file.is_empty() {
-            return Err(at("no file named".into()));
+            return Err(format!("line {}: {tag}: no file named", no + 1));
         }
         out.push(m);
     }
     Ok(out)
+}
+
+/// Read the options at the start of the words `rest` after a texture keyword into `m` (`-s`,
+/// `-o`, `-bm`; others named in `ignored`). Returns the index of the first word of the file name.
+fn parse_map_options(
+    rest: &[&str],
+    m: &mut MapLine,
+    ignored: &mut BTreeSet<String>,
+) -> std::result::Result<usize, String> {
+    let (line, tag) = (m.line, m.tag.clone());
+    let at = |what: String| format!("line {line}: {tag}: {what}");
+    let number = |w: &str| -> std::result::Result<f32, String> {
+        match w.parse::<f32>() {
+            Ok(x) if x.is_finite() => Ok(x),
+            _ => Err(at(format!("'{}' is not a finite number", clip(w)))),
+        }
+    };
+    let mut k = 0;
+    while k < rest.len() && rest[k].starts_with('-') && rest[k].parse::<f32>().is_err() {
+        let opt = rest[k];
+        k += 1;
+        let Some(arity) = option_arity(opt) else {
+            ignored.insert(opt.to_string());
+            // an unknown option: skip the numbers after it
+            while k < rest.len() && rest[k].parse::<f32>().is_ok() {
+                k += 1;
+            }
+            continue;
+        };
+        let numeric = matches!(opt, "-s" | "-o" | "-t" | "-mm" | "-bm" | "-boost");
+        let mut values = Vec::new();
+        while values.len() < arity && k < rest.len() {
+            if numeric && rest[k].parse::<f32>().is_err() {
+                break;
+            }
+            values.push(rest[k]);
+            k += 1;
+        }
+        if values.is_empty() {
+            return Err(at(format!("{opt} needs a value")));
+        }
+        match opt {
+            "-s" | "-o" => {
+                let default = if opt == "-s" { 1.0 } else { 0.0 };
+                let u = number(values[0])?;
+                let v = values.get(1).map_or(Ok(default), |w| number(w))?;
+                if opt == "-s" {
+                    m.scale = Vec2::new(u, v);
+                } else {
+                    m.offset = Vec2::new(u, v);
+                }
+            }
+            "-bm" => m.bump_mult = number(values[0])?,
+            _ => {
+                ignored.insert(opt.to_string());
+            }
+        }
+    }
+    Ok(k)
 }

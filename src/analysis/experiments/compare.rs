@@ -61,7 +61,7 @@ pub struct RegionRow {
 }
 
 /// A comparison: one row per strategy and each strategy's first run's image.
-#[derive(Clone, Debug, serde::Serialize)]
+#[derive(Clone, Debug, Default, serde::Serialize)]
 pub struct Comparison {
     /// One row per entry, in the order given.
     pub rows: Vec<CompareRow>,
@@ -140,108 +140,98 @@ pub fn compare_entries(
     // one thread pool for the whole job: no run pays for starting one
     with_threads(s.threads, || -> Result<Comparison> {
         warm_up(scene, s)?;
-        let mut rows = Vec::new();
-        let mut region_rows: Vec<RegionRow> = Vec::new();
-        let mut images = Vec::new();
-        let mut variances = Vec::new();
-        let mut spp_maps = Vec::new();
+        let mut c = Comparison {
+            reference_variance: reference.variance.as_deref().map(mean_variance),
+            ..Comparison::default()
+        };
         for st in strategies {
-            let mut runs: Vec<Vec<Vec3>> = Vec::new();
-            let (mut secs, mut spps, mut ms) = (Vec::new(), Vec::new(), Vec::<Metrics>::new());
-            let (mut est, mut method) = (Vec::new(), String::new());
-            let mut region_ms: Vec<Vec<Metrics>> = vec![Vec::new(); s.regions.len()];
-            for (k, seed) in s.run_seeds().into_iter().enumerate() {
-                let max_spp = if equal_time.is_some() {
-                    u32::MAX / 2
-                } else {
-                    spp
-                };
-                let settings = run_settings(st, s, max_spp, seed);
-                // equal spp: the render's own passes (one per replicate); equal time: passes of
-                // `spp`, a whole pass past the limit
-                let plan = PassPlan {
-                    pass_spp: equal_time.map(|_| spp),
-                    time_limit: equal_time,
-                    adaptive: st.adaptive,
-                    min_allocation_gain: st.min_allocation_gain,
-                    ..PassPlan::default()
-                };
-                let r = (st.render)(scene, &settings, &plan)?;
-                let (film, stats, reached) = (r.film, r.stats, r.spp);
-                let img = film.mean_image();
-                if k == 0 {
-                    variances.push(film.variance_image());
-                    spp_maps.push(st.adaptive.then(|| samples_per_pixel(&film)));
-                    method = r.estimate.method.name().to_string();
-                }
-                est.push((r.estimate.mse, r.estimate.rel_mse));
-                ms.push(metrics(&img, &reference.pixels));
-                for (r, m) in s.regions.iter().zip(&mut region_ms) {
-                    m.push(region_metrics(&img, &reference.pixels, s.width, r));
-                }
-                secs.push(stats.elapsed.as_secs_f64());
-                spps.push(reached as f64);
-                runs.push(img);
-                progress.finished(&format!("{} run {}/{}", st.name, k + 1, s.runs));
-                progress.advance(1);
-            }
-            for (r, m) in s.regions.iter().zip(&region_ms) {
-                region_rows.push(RegionRow {
-                    strategy: st.name.clone(),
-                    region: r.name.clone(),
-                    mse: mean_of(m, |m| m.mse),
-                    rel_mse: mean_of(m, |m| m.rel_mse),
-                    rmse: mean_of(m, |m| m.rmse),
-                    mae: mean_of(m, |m| m.mae),
-                    mse_reduction: 1.0,
-                });
-            }
-            let bias = bias_test(&runs, &reference.pixels);
-            rows.push(CompareRow {
-                strategy: st.name.clone(),
-                runs: s.runs,
-                spp: mean_of(&spps, |x| *x),
-                seconds: mean_of(&secs, |x| *x),
-                mse: mean_of(&ms, |m| m.mse),
-                rel_mse: mean_of(&ms, |m| m.rel_mse),
-                rmse: mean_of(&ms, |m| m.rmse),
-                mae: mean_of(&ms, |m| m.mae),
-                variance: variance_across_runs(&runs),
-                est_mse: mean_of(&est, |e| e.0),
-                est_rel_mse: mean_of(&est, |e| e.1),
-                estimate: method,
-                bias_t: bias.t,
-                bias_p: bias.p,
-                mse_reduction: 1.0,
-                efficiency: 1.0,
-            });
-            images.push(runs.swap_remove(0));
+            let mut runs = run_entry(scene, st, s, (spp, equal_time), progress, (&st.name, 1))?;
+            let (row, regions) = entry_rows(st, &runs, reference, s);
+            c.rows.push(row);
+            c.regions.extend(regions);
+            c.images.push(runs.images.swap_remove(0));
+            c.variances.push(runs.first_variance);
+            c.spp_maps.push(runs.first_spp_map);
         }
-        let base = rows
-            .iter()
-            .position(|r| r.strategy == "independent")
-            .unwrap_or(0);
-        let (base_mse, base_t) = (rows[base].mse, rows[base].seconds);
-        for r in &mut rows {
-            r.mse_reduction = base_mse / r.mse;
-            r.efficiency = (base_mse * base_t) / (r.mse * r.seconds);
-        }
-        // region rows are strategy-major: the baseline's rows start at base × regions
-        let nr = s.regions.len();
-        for k in 0..region_rows.len() {
-            region_rows[k].mse_reduction = region_rows[base * nr + k % nr].mse / region_rows[k].mse;
-        }
-        let reference_variance = reference.variance.as_deref().map(mean_variance);
-        Ok(Comparison {
-            baseline: rows[base].strategy.clone(),
-            rows,
-            regions: region_rows,
-            images,
-            variances,
-            spp_maps,
-            reference_variance,
-        })
+        relative_to_baseline(&mut c, s.regions.len());
+        Ok(c)
     })?
+}
+
+/// One entry's row and its rows per region: means over its runs of their metrics against
+/// `reference`, the variance across runs and the bias test; the reductions are left at 1.
+fn entry_rows(
+    st: &Entry,
+    runs: &EntryRuns,
+    reference: &RgbImage,
+    s: &ExperimentSettings,
+) -> (CompareRow, Vec<RegionRow>) {
+    let ms: Vec<Metrics> = runs
+        .images
+        .iter()
+        .map(|img| metrics(img, &reference.pixels))
+        .collect();
+    let regions = s
+        .regions
+        .iter()
+        .map(|r| {
+            let m: Vec<Metrics> = runs
+                .images
+                .iter()
+                .map(|img| region_metrics(img, &reference.pixels, s.width, r))
+                .collect();
+            RegionRow {
+                strategy: st.name.clone(),
+                region: r.name.clone(),
+                mse: mean_of(&m, |m| m.mse),
+                rel_mse: mean_of(&m, |m| m.rel_mse),
+                rmse: mean_of(&m, |m| m.rmse),
+                mae: mean_of(&m, |m| m.mae),
+                mse_reduction: 1.0,
+            }
+        })
+        .collect();
+    let bias = bias_test(&runs.images, &reference.pixels);
+    let row = CompareRow {
+        strategy: st.name.clone(),
+        runs: s.runs,
+        spp: mean_of(&runs.spp, |x| *x),
+        seconds: mean_of(&runs.seconds, |x| *x),
+        mse: mean_of(&ms, |m| m.mse),
+        rel_mse: mean_of(&ms, |m| m.rel_mse),
+        rmse: mean_of(&ms, |m| m.rmse),
+        mae: mean_of(&ms, |m| m.mae),
+        variance: variance_across_runs(&runs.images),
+        est_mse: mean_of(&runs.estimates, |e| e.0),
+        est_rel_mse: mean_of(&runs.estimates, |e| e.1),
+        estimate: runs.method.clone(),
+        bias_t: bias.t,
+        bias_p: bias.p,
+        mse_reduction: 1.0,
+        efficiency: 1.0,
+    };
+    (row, regions)
+}
+
+/// Name the baseline (independent, or the first row) and set every row's MSE reduction and
+/// efficiency, and every region row's MSE reduction, against it (`nr` regions per entry).
+fn relative_to_baseline(c: &mut Comparison, nr: usize) {
+    let rows = &mut c.rows;
+    let base = rows
+        .iter()
+        .position(|r| r.strategy == "independent")
+        .unwrap_or(0);
+    let (base_mse, base_t) = (rows[base].mse, rows[base].seconds);
+    for r in rows.iter_mut() {
+        r.mse_reduction = base_mse / r.mse;
+        r.efficiency = (base_mse * base_t) / (r.mse * r.seconds);
+    }
+    // region rows are strategy-major: the baseline's rows start at base × regions
+    let region_rows = &mut c.regions;
+    for k in 0..region_rows.len() {
+        region_rows[k].mse_reduction = region_rows[base * nr + k % nr].mse / region_rows[k].mse;
+    }
+    c.baseline = rows[base].strategy.clone();
 }
 
 impl Comparison {

@@ -24,7 +24,7 @@ pub struct ConvergePoint {
 
 /// A sweep: points in (strategy, spp) order, and per strategy the fitted log-log slopes of MSE
 /// and relMSE against spp.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
 pub struct Convergence {
     /// Every (entry, spp) point.
     pub points: Vec<ConvergePoint>,
@@ -81,66 +81,56 @@ pub fn converge_entries(
     }
     with_threads(s.threads, || -> Result<Convergence> {
         warm_up(scene, s)?;
-        let mut points = Vec::new();
-        let mut slopes = Vec::new();
-        let mut images = Vec::new();
-        let mut spp_maps = Vec::new();
+        let mut c = Convergence::default();
         for st in strategies {
             let mut xs = Vec::new();
             let (mut ys, mut rs) = (Vec::new(), Vec::new());
             for &spp in spps {
-                let (mut mse, mut rel, mut secs) = (0.0, 0.0, 0.0);
-                let (mut est_mse, mut est_rel) = (0.0, 0.0);
-                for (k, seed) in s.run_seeds().into_iter().enumerate() {
-                    let settings = run_settings(st, s, spp, seed);
-                    let plan = PassPlan {
-                        adaptive: st.adaptive,
-                        min_allocation_gain: st.min_allocation_gain,
-                        ..PassPlan::default()
-                    };
-                    let r = (st.render)(scene, &settings, &plan)?;
-                    est_mse += r.estimate.mse;
-                    est_rel += r.estimate.rel_mse;
-                    let (film, stats) = (r.film, r.stats);
-                    let img = film.mean_image();
-                    let m = metrics(&img, &reference.pixels);
-                    if k == 0 {
-                        spp_maps.push(st.adaptive.then(|| samples_per_pixel(&film)));
-                        images.push((img, film.variance_image()));
-                    }
-                    mse += m.mse;
-                    rel += m.rel_mse;
-                    secs += stats.elapsed.as_secs_f64();
-                    progress.finished(&format!("{} spp {spp} run {}/{}", st.name, k + 1, s.runs));
-                    progress.advance(spp as u64);
-                }
-                let k = s.runs as f64;
-                points.push(ConvergePoint {
-                    strategy: st.name.clone(),
-                    spp,
-                    mse: mse / k,
-                    rel_mse: rel / k,
-                    seconds: secs / k,
-                    est_mse: est_mse / k,
-                    est_rel_mse: est_rel / k,
-                });
+                let label = format!("{} spp {spp}", st.name);
+                let mut runs =
+                    run_entry(scene, st, s, (spp, None), progress, (&label, spp as u64))?;
+                let point = point_of(st, spp, &runs, reference, s.runs);
                 xs.push(spp as f64);
-                ys.push(mse / k);
-                rs.push(rel / k);
+                ys.push(point.mse);
+                rs.push(point.rel_mse);
+                c.points.push(point);
+                c.spp_maps.push(runs.first_spp_map);
+                c.images
+                    .push((runs.images.swap_remove(0), runs.first_variance));
             }
-            slopes.push(ConvergeSlope {
+            c.slopes.push(ConvergeSlope {
                 strategy: st.name.clone(),
                 mse_slope: log_log_slope(&xs, &ys),
                 rel_mse_slope: log_log_slope(&xs, &rs),
             });
         }
-        Ok(Convergence {
-            points,
-            slopes,
-            images,
-            spp_maps,
-        })
+        Ok(c)
     })?
+}
+
+/// The point of entry `st` at `spp`: its `k` runs' means of their MSE and relMSE against
+/// `reference`, of their wall time and of their own error estimates.
+fn point_of(st: &Entry, spp: u32, runs: &EntryRuns, reference: &RgbImage, k: u32) -> ConvergePoint {
+    let (mut mse, mut rel, mut secs) = (0.0, 0.0, 0.0);
+    let (mut est_mse, mut est_rel) = (0.0, 0.0);
+    for (i, img) in runs.images.iter().enumerate() {
+        let m = metrics(img, &reference.pixels);
+        est_mse += runs.estimates[i].0;
+        est_rel += runs.estimates[i].1;
+        mse += m.mse;
+        rel += m.rel_mse;
+        secs += runs.seconds[i];
+    }
+    let k = k as f64;
+    ConvergePoint {
+        strategy: st.name.clone(),
+        spp,
+        mse: mse / k,
+        rel_mse: rel / k,
+        seconds: secs / k,
+        est_mse: est_mse / k,
+        est_rel_mse: est_rel / k,
+    }
 }
 
 impl Convergence {

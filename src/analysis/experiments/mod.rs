@@ -280,6 +280,70 @@ fn samples_per_pixel(film: &crate::film::Film) -> Vec<u32> {
         .collect()
 }
 
+/// The runs of one entry at one spp (or one wall time): per run, in seed order, its mean image,
+/// wall time, spp reached and its own error estimate; and what the first run leaves the report.
+#[derive(Default)]
+struct EntryRuns {
+    /// Each run's mean image (row-major).
+    images: Vec<Vec<Vec3>>,
+    /// Each run's wall time in seconds.
+    seconds: Vec<f64>,
+    /// Each run's spp reached.
+    spp: Vec<f64>,
+    /// Each run's estimate of its own MSE and relMSE.
+    estimates: Vec<(f64, f64)>,
+    /// The first run's per-pixel variance of its mean.
+    first_variance: Vec<Vec3>,
+    /// The first run's samples per pixel, for an adaptive entry.
+    first_spp_map: Option<Vec<u32>>,
+    /// How the first run estimated its error (its method's name).
+    method: String,
+}
+
+/// Render entry `st` once per run seed ([`ExperimentSettings::run_seeds`]): at `spp`, or with
+/// `equal_time` in passes of `spp` until that time is past. Each run is reported to `progress`
+/// as "`label` run k/K" and advances it by `advance`.
+fn run_entry(
+    scene: &Scene,
+    st: &Entry,
+    s: &ExperimentSettings,
+    (spp, equal_time): (u32, Option<Duration>),
+    progress: &dyn Progress,
+    (label, advance): (&str, u64),
+) -> Result<EntryRuns> {
+    let mut runs = EntryRuns::default();
+    for (k, seed) in s.run_seeds().into_iter().enumerate() {
+        let max_spp = if equal_time.is_some() {
+            u32::MAX / 2
+        } else {
+            spp
+        };
+        let settings = run_settings(st, s, max_spp, seed);
+        // equal spp: the render's own passes (one per replicate); equal time: passes of
+        // `spp`, a whole pass past the limit
+        let plan = PassPlan {
+            pass_spp: equal_time.map(|_| spp),
+            time_limit: equal_time,
+            adaptive: st.adaptive,
+            min_allocation_gain: st.min_allocation_gain,
+            ..PassPlan::default()
+        };
+        let r = (st.render)(scene, &settings, &plan)?;
+        if k == 0 {
+            runs.first_variance = r.film.variance_image();
+            runs.first_spp_map = st.adaptive.then(|| samples_per_pixel(&r.film));
+            runs.method = r.estimate.method.name().to_string();
+        }
+        runs.images.push(r.film.mean_image());
+        runs.estimates.push((r.estimate.mse, r.estimate.rel_mse));
+        runs.seconds.push(r.stats.elapsed.as_secs_f64());
+        runs.spp.push(r.spp as f64);
+        progress.finished(&format!("{label} run {}/{}", k + 1, s.runs));
+        progress.advance(advance);
+    }
+    Ok(runs)
+}
+
 /// One small untimed render, so the first timed run does not pay for starting the thread pool
 /// and warming the caches.
 fn warm_up(scene: &Scene, s: &ExperimentSettings) -> Result<()> {

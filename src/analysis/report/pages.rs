@@ -24,6 +24,19 @@ fn compare_columns() -> Vec<Column> {
     ]
 }
 
+impl ReportImage {
+    /// The reference's image, first in every report.
+    fn reference(reference: &RgbImage) -> ReportImage {
+        ReportImage {
+            name: "reference".into(),
+            group: String::new(),
+            reference: true,
+            rgb: reference.pixels.clone(),
+            variance: reference.variance.clone(),
+        }
+    }
+}
+
 impl Report {
     /// The report of `vrpt compare`: the summary (ranked by efficiency for `equal_time` runs,
     /// else by MSE), the reference and each strategy's first run, the metrics (whole image,
@@ -35,13 +48,7 @@ impl Report {
         (title, equal_time): (&str, bool),
         settings: Vec<(String, String)>,
     ) -> Result<Report> {
-        let mut images = vec![ReportImage {
-            name: "reference".into(),
-            group: String::new(),
-            reference: true,
-            rgb: reference.pixels.clone(),
-            variance: reference.variance.clone(),
-        }];
+        let mut images = vec![ReportImage::reference(reference)];
         for ((row, img), var) in c.rows.iter().zip(&c.images).zip(&c.variances) {
             images.push(ReportImage {
                 name: row.strategy.clone(),
@@ -105,60 +112,11 @@ impl Report {
         settings: Vec<(String, String)>,
         plot_svg: String,
     ) -> Result<Report> {
-        let mut images = vec![ReportImage {
-            name: "reference".into(),
-            group: String::new(),
-            reference: true,
-            rgb: reference.pixels.clone(),
-            variance: reference.variance.clone(),
-        }];
+        let mut images = vec![ReportImage::reference(reference)];
         let mut spps: Vec<u32> = c.points.iter().map(|p| p.spp).collect();
         spps.sort_unstable();
         spps.dedup();
-        // groups in spp order, strategies in the run's order within each
-        for &spp in &spps {
-            for (p, (img, var)) in c.points.iter().zip(&c.images) {
-                if p.spp == spp {
-                    images.push(ReportImage {
-                        name: p.strategy.clone(),
-                        group: format!("{spp} spp"),
-                        reference: false,
-                        rgb: img.clone(),
-                        variance: Some(var.clone()),
-                    });
-                }
-            }
-        }
-        let by_spp = |key: &str, label: &str| -> Result<Table> {
-            let mut columns = vec![Column::text("strategy", "strategy")];
-            columns.extend(
-                spps.iter()
-                    .map(|n| Column::number(&format!("{key}_{n}"), &format!("{label} {n} spp"))),
-            );
-            let rows: Vec<serde_json::Map<String, serde_json::Value>> = c
-                .slopes
-                .iter()
-                .map(|s| {
-                    let mut m = serde_json::Map::new();
-                    m.insert("strategy".into(), s.strategy.clone().into());
-                    for p in c.points.iter().filter(|p| p.strategy == s.strategy) {
-                        let v = match key {
-                            "mse" => p.mse,
-                            "est_mse" => p.est_mse,
-                            _ => p.rel_mse,
-                        };
-                        m.insert(format!("{key}_{}", p.spp), number(v));
-                    }
-                    m
-                })
-                .collect();
-            Ok(Table {
-                title: format!("{label} by spp (mean over runs)"),
-                columns,
-                rows,
-                row_key: "strategy".into(),
-            })
-        };
+        images.extend(images_by_spp(c, &spps));
         let tables = vec![
             Table::of(
                 "fitted log-log slopes (theory: −1 for independent samples)",
@@ -170,9 +128,9 @@ impl Report {
                 &c.slopes,
                 "strategy",
             )?,
-            by_spp("mse", "MSE")?,
-            by_spp("est_mse", "estimated MSE")?,
-            by_spp("rel_mse", "relMSE")?,
+            by_spp(c, &spps, "mse", "MSE"),
+            by_spp(c, &spps, "est_mse", "estimated MSE"),
+            by_spp(c, &spps, "rel_mse", "relMSE"),
         ];
         Ok(Report {
             kind: "converge".into(),
@@ -214,13 +172,7 @@ impl Report {
             width: reference.width,
             height: reference.height,
             images: vec![
-                ReportImage {
-                    name: "reference".into(),
-                    group: String::new(),
-                    reference: true,
-                    rgb: reference.pixels.clone(),
-                    variance: reference.variance.clone(),
-                },
+                ReportImage::reference(reference),
                 ReportImage {
                     name: image_name.into(),
                     group: String::new(),
@@ -234,5 +186,58 @@ impl Report {
             summary: None,
             spp_maps: Vec::new(),
         }
+    }
+}
+
+/// Each point's first run of a sweep, one group per spp of `spps` (ascending), the strategies
+/// in the run's order within each.
+fn images_by_spp(c: &Convergence, spps: &[u32]) -> Vec<ReportImage> {
+    let mut images = Vec::new();
+    for &spp in spps {
+        for (p, (img, var)) in c.points.iter().zip(&c.images) {
+            if p.spp == spp {
+                images.push(ReportImage {
+                    name: p.strategy.clone(),
+                    group: format!("{spp} spp"),
+                    reference: false,
+                    rgb: img.clone(),
+                    variance: Some(var.clone()),
+                });
+            }
+        }
+    }
+    images
+}
+
+/// A table of one metric of a sweep (`key`: `mse`, `est_mse` or `rel_mse`; called `label`):
+/// a row per strategy, a column per spp of `spps`.
+fn by_spp(c: &Convergence, spps: &[u32], key: &str, label: &str) -> Table {
+    let mut columns = vec![Column::text("strategy", "strategy")];
+    columns.extend(
+        spps.iter()
+            .map(|n| Column::number(&format!("{key}_{n}"), &format!("{label} {n} spp"))),
+    );
+    let rows: Vec<serde_json::Map<String, serde_json::Value>> = c
+        .slopes
+        .iter()
+        .map(|s| {
+            let mut m = serde_json::Map::new();
+            m.insert("strategy".into(), s.strategy.clone().into());
+            for p in c.points.iter().filter(|p| p.strategy == s.strategy) {
+                let v = match key {
+                    "mse" => p.mse,
+                    "est_mse" => p.est_mse,
+                    _ => p.rel_mse,
+                };
+                m.insert(format!("{key}_{}", p.spp), number(v));
+            }
+            m
+        })
+        .collect();
+    Table {
+        title: format!("{label} by spp (mean over runs)"),
+        columns,
+        rows,
+        row_key: "strategy".into(),
     }
 }
