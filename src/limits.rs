@@ -125,6 +125,9 @@ pub fn check_texels(
     .map_err(|e| e.to_string())
 }
 
+/// The most worker threads a command takes.
+pub const MAX_THREADS: usize = 1024;
+
 // The values of flags, parsed in one place (clap value parsers): each refuses what the limits
 // above refuse, with one line saying what it wanted.
 
@@ -165,5 +168,23 @@ pub fn parse_target(s: &str) -> std::result::Result<f64, String> {
     match s.parse::<f64>() {
         Ok(x) if x > 0.0 && x.is_finite() => Ok(x),
         _ => Err(format!("'{s}' is not a positive relMSE")),
+    }
+}
+
+/// A gain: a finite number ≥ 0.
+pub fn parse_gain(s: &str) -> std::result::Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(x) if x >= 0.0 && x.is_finite() => Ok(x),
+        _ => Err(format!("'{s}' is not a gain (a finite number ≥ 0)")),
+    }
+}
+
+/// A count of worker threads, 1 to [`MAX_THREADS`].
+pub fn parse_threads(s: &str) -> std::result::Result<usize, String> {
+    match s.parse::<usize>() {
+        Ok(n) if (1..=MAX_THREADS).contains(&n) => Ok(n),
+        _ => Err(format!(
+            "'{s}' is not a thread count from 1 to {MAX_THREADS}"
+        )),
     }
 }

@@ -264,6 +264,65 @@ impl std::fmt::Display for Preset {
     }
 }
 
+/// How points, directions and lights are sampled, as the flags give it: a preset, or the axes
+/// separately (every command that renders takes these flags).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::Args)]
+pub struct StrategyArgs {
+    /// A named strategy; a --sampler, --directions or --lights given too must agree with it.
+    #[arg(long, value_enum)]
+    pub strategy: Option<Preset>,
+    /// Where sample points come from (default: stratified).
+    #[arg(long, value_enum)]
+    pub sampler: Option<SamplerKind>,
+    /// How bounce directions are chosen (default: phong).
+    #[arg(long, value_enum)]
+    pub directions: Option<Directions>,
+    /// How light is found at each vertex (default: mis).
+    #[arg(long, value_enum)]
+    pub lights: Option<LightStrategy>,
+    /// How a point on a light is placed (default: auto).
+    #[arg(long, value_enum)]
+    pub light_points: Option<LightPoints>,
+    /// How the light of a vertex is chosen (default: tree).
+    #[arg(long, value_enum)]
+    pub light_choice: Option<LightChoice>,
+}
+
+impl StrategyArgs {
+    /// The strategy the flags ask for ([`Strategy::from_parts`]); an error if a flag
+    /// contradicts the preset.
+    pub fn resolve(&self) -> Result<Strategy, String> {
+        let axes = (self.sampler, self.directions, self.lights);
+        Strategy::from_parts(self.strategy, axes, (self.light_points, self.light_choice))
+    }
+}
+
+impl From<Strategy> for StrategyArgs {
+    /// Flags that give every axis of `s`.
+    fn from(s: Strategy) -> Self {
+        StrategyArgs {
+            strategy: None,
+            sampler: Some(s.sampler),
+            directions: Some(s.directions),
+            lights: Some(s.lights),
+            light_points: Some(s.light_points),
+            light_choice: Some(s.light_choice),
+        }
+    }
+}
+
+/// A comma-separated list of strategies as one flag value ([`Strategy::parse_list`]); a
+/// newtype, so clap takes it as one value.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Strategies(pub Vec<Strategy>);
+
+impl Strategies {
+    /// The list `s` names (a clap value parser).
+    pub fn parse(s: &str) -> Result<Strategies, String> {
+        Strategy::parse_list(s).map(Strategies)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

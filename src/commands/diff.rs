@@ -2,10 +2,9 @@
 //! largest relative difference, where the image records it the variance of its mean and the
 //! bias z-scores, the same per region, and optionally a false-colour error map and a report.
 
-use super::{resolve_regions, Written};
+use super::{RegionArgs, Written};
 use crate::analysis::metrics::{
     image_bias, mean_relative_variance, mean_variance, metrics, region_metrics, ImageBias, Metrics,
-    Region,
 };
 use crate::analysis::plots::write_error_map;
 use crate::analysis::report::{number, Column, Report, Table};
@@ -15,18 +14,21 @@ use crate::output::{EstimateMethod, RenderMetadata};
 use glam::Vec3;
 use std::path::{Path, PathBuf};
 
-/// What to compare, and what to write.
-#[derive(Clone, Debug, Default)]
+/// What to compare, and what to write: `vrpt diff`'s flags.
+#[derive(Clone, Debug, Default, clap::Args)]
 pub struct DiffRequest {
+    /// The image to judge (EXR).
     pub image: PathBuf,
+    /// The reference (EXR).
     pub reference: PathBuf,
-    /// A PNG of the per-pixel relative squared error, with its colour bar.
+    /// Write a false-colour map of the per-pixel relative squared error to this PNG.
+    #[arg(long, value_name = "PNG")]
     pub error_map: Option<PathBuf>,
-    /// A self-contained HTML report.
+    /// Write a self-contained HTML report: both images (HDR), error views, metrics.
+    #[arg(long, value_name = "HTML")]
     pub report: Option<PathBuf>,
-    /// Regions reported on their own, and a file of more.
-    pub regions: Vec<Region>,
-    pub regions_file: Option<PathBuf>,
+    #[command(flatten)]
+    pub regions: RegionArgs,
 }
 
 /// The metrics of a diff, and the files written.
@@ -76,7 +78,7 @@ pub fn run(req: &DiffRequest) -> Result<DiffOutcome> {
         ("IMAGE", req.image.as_path()),
         ("REFERENCE", req.reference.as_path()),
     ];
-    inputs.extend(req.regions_file.as_deref().map(|p| ("--regions", p)));
+    inputs.extend(req.regions.regions.as_deref().map(|p| ("--regions", p)));
     crate::image_io::check_outputs(&outputs, &inputs)?;
     let a = read_exr(&req.image)?;
     let r = read_exr(&req.reference)?;
@@ -99,7 +101,7 @@ pub fn run(req: &DiffRequest) -> Result<DiffOutcome> {
     if let Some(p) = &req.report {
         check_writable(p)?;
     }
-    let regions = resolve_regions(&req.regions, req.regions_file.as_deref(), a.width, a.height)?;
+    let regions = req.regions.resolve(a.width, a.height)?;
     let mut out = DiffOutcome {
         metrics: metrics(&a.pixels, &r.pixels),
         max_relative_difference: max_relative_difference(&a.pixels, &r.pixels),

@@ -2,39 +2,57 @@
 //! ([`crate::analysis::experiments`]), and write what was asked for: CSV, JSON, the PNG grid,
 //! the convergence plots, the HTML report.
 
-use super::{resolve_regions, Written};
+use super::{RegionArgs, Written};
 use crate::analysis::experiments::{
     compare_entries, converge_entries, write_csv, Comparison, Convergence, Entry,
     ExperimentSettings,
 };
-use crate::analysis::metrics::Region;
 use crate::analysis::plots::{convergence_svg, write_comparison_grid, write_convergence_plot};
 use crate::analysis::report::Report;
 use crate::error::{Error, Result};
 use crate::image_io::{
     check_image_path, check_writable, read_exr, write_bytes, NamedPath, RgbImage,
 };
+use crate::limits::{parse_exposure, parse_seconds, parse_threads};
 use crate::output::RenderMetadata;
 use crate::render::Progress;
 use crate::scene::{self, Scene};
-use crate::strategy::Strategy;
+use crate::strategy::{Strategies, Strategy};
 use std::path::PathBuf;
 
 /// What both experiments share: the scene, the reference, the strategies and runs, and the
-/// files to write.
-#[derive(Clone, Debug, Default)]
+/// files to write (the flags of `compare` and `converge` both take).
+#[derive(Clone, Debug, Default, clap::Args)]
 pub struct ExperimentRequest {
+    /// The scene: an .obj file, a scene.toml, or a folder holding a scene.toml.
     pub scene: PathBuf,
-    /// An EXR from `vrpt render` or `vrpt merge` (its size and max depth are used).
+    /// The converged reference EXR (its size and max depth are used; its scene hash must match).
+    #[arg(long)]
     pub reference: PathBuf,
-    pub strategies: Vec<Strategy>,
+    /// Strategies, comma-separated (default: the six presets).
+    #[arg(long, value_parser = Strategies::parse, default_value = "independent,stratified,importance,combined,nee,mis",
+          long_help = Strategy::list_help())]
+    pub strategies: Strategies,
+    /// Independent runs per strategy.
+    #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(2..))]
     pub runs: u32,
-    /// The first seed of the runs ([`ExperimentSettings::run_seeds`]).
+    /// Seed of the first run: the runs take the first RUNS seeds from SEED up that the
+    /// reference does not hold (its seed, a merge's inputs'), so none reuses its samples.
+    #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Worker threads (default: all cores).
+    #[arg(long, value_parser = parse_threads)]
     pub threads: Option<usize>,
+    /// Write the results as CSV to this file.
+    #[arg(long, value_name = "FILE")]
     pub csv: Option<PathBuf>,
+    /// Write the results as JSON to this file.
+    #[arg(long, value_name = "FILE")]
     pub json: Option<PathBuf>,
+    /// Write a self-contained HTML report: the summary, images (HDR), error views, metrics.
+    #[arg(long, value_name = "HTML")]
     pub report: Option<PathBuf>,
+    #[command(flatten)]
     pub allocation: AllocationArgs,
 }
 
@@ -64,7 +82,7 @@ impl ExperimentRequest {
             ));
         }
         let mut entries = Vec::new();
-        for &st in &self.strategies {
+        for &st in &self.strategies.0 {
             entries.push(Entry::builtin(st).with_replicates(r));
             if a.adaptive {
                 entries.push(Entry::builtin(st).with_replicates(r).adaptive());
@@ -75,29 +93,37 @@ impl ExperimentRequest {
 }
 
 /// `vrpt compare`: the strategies at equal spp, or at equal time per run.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, clap::Args)]
 pub struct CompareRequest {
+    #[command(flatten)]
     pub experiment: ExperimentRequest,
-    /// Samples per pixel of each run (with `equal_time`: per pass).
+    /// Samples per pixel of each run (with --equal-time: per pass).
+    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..))]
     pub spp: u32,
-    /// Seconds per run instead of a fixed spp.
+    /// Give each run this many seconds instead of a fixed spp (whole passes of --spp).
+    #[arg(long, value_name = "SECONDS", value_parser = parse_seconds, allow_negative_numbers = true)]
     pub equal_time: Option<f64>,
-    /// A PNG grid of each strategy's first run and error map.
+    /// Write a PNG grid: per strategy its first run's image and error map.
+    #[arg(long, value_name = "PNG")]
     pub grid: Option<PathBuf>,
-    /// Exposure of the grid's images, in stops.
+    /// Exposure of the images in the grid, in stops, within ±64.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = parse_exposure)]
     pub exposure: f32,
-    /// Regions reported on their own, and a file of more.
-    pub regions: Vec<Region>,
-    pub regions_file: Option<PathBuf>,
+    #[command(flatten)]
+    pub regions: RegionArgs,
 }
 
 /// `vrpt converge`: each strategy at each spp, from scratch.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, clap::Args)]
 pub struct ConvergeRequest {
+    #[command(flatten)]
     pub experiment: ExperimentRequest,
-    /// At least two sample counts.
+    /// Sample counts, comma-separated (at least two); each is rendered from scratch.
+    #[arg(long, value_delimiter = ',', default_value = "1,4,16,64,256",
+          value_parser = clap::value_parser!(u32).range(1..))]
     pub spp: Vec<u32>,
-    /// Log-log plots of MSE against spp, `.svg` or `.png`.
+    /// Write the log-log plot of MSE against spp (.svg or .png); may be given twice.
+    #[arg(long = "plot", value_name = "FILE")]
     pub plots: Vec<PathBuf>,
 }
 
@@ -150,7 +176,7 @@ fn prepare_common(
     ];
     inputs.extend_from_slice(more.1);
     crate::image_io::check_outputs(&outputs, &inputs)?;
-    if a.strategies.is_empty() {
+    if a.strategies.0.is_empty() {
         return Err(Error::Settings("no strategies to run".into()));
     }
     a.entries()?;
@@ -234,18 +260,14 @@ impl CompareRequest {
             .into_iter()
             .collect();
         let regions: Vec<NamedPath> = self
-            .regions_file
+            .regions
+            .regions
             .as_deref()
             .map(|r| ("--regions", r))
             .into_iter()
             .collect();
         let (scene, reference, mut settings) = prepare_common(&self.experiment, (&grid, &regions))?;
-        settings.regions = resolve_regions(
-            &self.regions,
-            self.regions_file.as_deref(),
-            settings.width,
-            settings.height,
-        )?;
+        settings.regions = self.regions.resolve(settings.width, settings.height)?;
         Ok(Prepared {
             request: self,
             scene,

@@ -17,7 +17,7 @@
 //! the right map only. The total variation distance between the two densities,
 //! `½ Σ |p − q| ΔA`, says how much of the sampling mass sits where the light does not come from.
 
-use super::Written;
+use super::{ImageArgs, Written};
 use crate::analysis::plots::write_density_pair;
 use crate::bsdf::Directions;
 use crate::camera::Camera;
@@ -28,12 +28,12 @@ use crate::integrator::{radiance, IntegratorSettings, RayCounts};
 use crate::render::{learn_guide, RenderSettings};
 use crate::sampler::{IndependentSampler, Sampler};
 use crate::scene::{self, Scene};
-use crate::strategy::Strategy;
+use crate::strategy::{Strategy, StrategyArgs};
 use glam::{UVec2, Vec2, Vec3};
 use rayon::prelude::*;
 use std::path::PathBuf;
 
-/// What to show: the flags of `vrpt guide` (the binary adds the strategy flags).
+/// What to show: the flags of `vrpt guide`.
 #[derive(Clone, Debug, clap::Args)]
 pub struct GuideRequest {
     /// The scene: an .obj file, a scene.toml, or a folder holding a scene.toml.
@@ -44,24 +44,15 @@ pub struct GuideRequest {
     /// The PNG to write.
     #[arg(short, long, default_value = "guide.png")]
     pub output: PathBuf,
-    /// Image width of the render whose guide is learned (default: the scene's).
-    #[arg(long)]
-    pub width: Option<u32>,
-    /// Image height (default: the scene's).
-    #[arg(long)]
-    pub height: Option<u32>,
-    /// Samples per pixel of that render: training takes about half as many (default: the scene's).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
-    pub spp: Option<u32>,
-    /// Max path segments (default: the scene's).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
-    pub max_depth: Option<u32>,
+    /// The render whose guide is learned (its training takes about half its spp).
+    #[command(flatten)]
+    pub image: ImageArgs,
     /// Seed of the render whose guide is learned.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// The strategy (its directions must be `guided`): set by the binary from its flags.
-    #[arg(skip)]
-    pub strategy: Strategy,
+    /// The strategy, whose directions must be `guided` (the default here).
+    #[command(flatten)]
+    pub strategy: StrategyArgs,
     /// Paths per texel of the brute-force map of incident radiance.
     #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..))]
     pub brute_spp: u32,
@@ -69,8 +60,20 @@ pub struct GuideRequest {
     #[arg(long, default_value_t = 128, value_parser = clap::value_parser!(u32).range(2..4097))]
     pub map_width: u32,
     /// Worker threads (default: all cores).
-    #[arg(long)]
+    #[arg(long, value_parser = crate::limits::parse_threads)]
     pub threads: Option<usize>,
+}
+
+impl GuideRequest {
+    /// The strategy the flags ask for, with guided directions where they name none.
+    pub fn strategy(&self) -> Result<Strategy> {
+        let directions = self.strategy.directions.or(Some(Directions::Guided));
+        let flags = StrategyArgs {
+            directions,
+            ..self.strategy
+        };
+        flags.resolve().map_err(Error::Settings)
+    }
 }
 
 /// `X,Y` as two pixel coordinates.
@@ -165,10 +168,11 @@ pub fn run(req: &GuideRequest) -> Result<GuideOutcome> {
 /// The checks on the request that need no scene: a guided strategy, a brute-force spp and map
 /// width in range, and a PNG output that can be written and is not the scene.
 fn check_request(req: &GuideRequest) -> Result<()> {
-    if req.strategy.directions != Directions::Guided {
+    let strategy = req.strategy()?;
+    if strategy.directions != Directions::Guided {
         return Err(Error::Settings(format!(
             "vrpt guide shows a guided strategy's guide, not {} (use --directions guided)",
-            req.strategy.axes_name()
+            strategy.axes_name()
         )));
     }
     if req.brute_spp == 0 || req.map_width < 2 {
@@ -197,16 +201,11 @@ fn load_scene(req: &GuideRequest) -> Result<(Scene, RenderSettings)> {
         .map(|p| ("the scene's file", p))
         .collect();
     crate::image_io::check_outputs(&[("-o", &req.output)], &read)?;
-    let base = RenderSettings::for_scene(&scene);
     let settings = RenderSettings {
-        width: req.width.unwrap_or(base.width),
-        height: req.height.unwrap_or(base.height),
-        spp: req.spp.unwrap_or(base.spp),
-        max_depth: req.max_depth.unwrap_or(base.max_depth),
         seed: req.seed,
-        strategy: req.strategy,
+        strategy: req.strategy()?,
         threads: req.threads,
-        ..base
+        ..req.image.settings(&scene, None)
     };
     let (px, py) = req.pixel;
     if px >= settings.width || py >= settings.height {

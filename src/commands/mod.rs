@@ -1,8 +1,11 @@
 //! What each command of the `vrpt` binary does, as library functions: a typed request in, a
 //! typed outcome out, no printing. A command is prepared first (inputs read and checked, output
 //! paths checked, the scene loaded: its warnings can be shown before the long part), then run.
-//! The binary (`src/cli.rs`) only turns flags into requests, shows progress and prints outcomes;
-//! tests call these functions directly.
+//! Every request is its command's flags (a `clap::Args` struct: the argument struct *is* the
+//! request), shared groups of flags flattened into it ([`ImageArgs`], [`RegionArgs`],
+//! [`crate::strategy::StrategyArgs`]); the binary (`src/cli.rs`) adds only what concerns the
+//! terminal (`--quiet`), shows progress and prints outcomes; tests call these functions
+//! directly.
 //!
 //! - [`render`]: a scene to an EXR or PNG, in passes, shards, under a time limit or a stop flag;
 //! - [`merge`]: renders of the same scene and settings into one image;
@@ -24,28 +27,73 @@ pub mod warptest;
 
 use crate::analysis::metrics::Region;
 use crate::error::{Error, Result};
+use crate::render::RenderSettings;
+use crate::scene::Scene;
 use std::path::{Path, PathBuf};
 
-/// Regions given on the command line and in a file of `NAME X,Y,W,H` lines, checked against a
-/// `width × height` image: what `diff` and `compare` report on their own.
-pub fn resolve_regions(
-    given: &[Region],
-    file: Option<&Path>,
-    width: u32,
-    height: u32,
-) -> Result<Vec<Region>> {
-    let mut all = given.to_vec();
-    if let Some(p) = file {
-        let text = crate::error::read_text(p)?;
-        all.extend(Region::parse_list(&text).map_err(|message| Error::Scene {
-            path: p.to_path_buf(),
-            message,
-        })?);
+/// The image of a render, as the flags give it: each `None` takes the scene's `[render]`
+/// default, then the built-in one.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::Args)]
+pub struct ImageArgs {
+    /// Samples per pixel (default: scene.toml's, else 16).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    pub spp: Option<u32>,
+    /// Image width in pixels (default: scene.toml's, else 256).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=65536))]
+    pub width: Option<u32>,
+    /// Image height in pixels (default: scene.toml's, else 256).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=65536))]
+    pub height: Option<u32>,
+    /// Longest path in segments, counting the camera ray: 1 shows emitters only, 2 adds direct
+    /// light (default: scene.toml's, else 8).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1024))]
+    pub max_depth: Option<u32>,
+}
+
+impl ImageArgs {
+    /// The settings of a render of `scene`: these flags over its `[render]` defaults over the
+    /// built-in ones ([`RenderSettings::for_scene`]); `spp` is the spp when the flag is absent.
+    pub fn settings(&self, scene: &Scene, spp: Option<u32>) -> RenderSettings {
+        let d = RenderSettings::for_scene(scene);
+        RenderSettings {
+            width: self.width.unwrap_or(d.width),
+            height: self.height.unwrap_or(d.height),
+            spp: self.spp.or(spp).unwrap_or(d.spp),
+            max_depth: self.max_depth.unwrap_or(d.max_depth),
+            ..d
+        }
     }
-    for r in &all {
-        r.check(width, height).map_err(Error::Settings)?;
+}
+
+/// Parts of the image reported on their own (`diff`, `compare`).
+#[derive(Clone, Debug, Default, PartialEq, clap::Args)]
+pub struct RegionArgs {
+    /// A region reported on its own: X,Y,W,H in pixels (rows from the top) or NAME=X,Y,W,H;
+    /// repeatable.
+    #[arg(long, value_name = "X,Y,W,H", value_parser = Region::parse)]
+    pub region: Vec<Region>,
+    /// A file of `NAME X,Y,W,H` lines (`#` comments), e.g. scenes/glossy-plates/regions.txt.
+    #[arg(long, value_name = "FILE")]
+    pub regions: Option<PathBuf>,
+}
+
+impl RegionArgs {
+    /// The regions given and those of the file of `NAME X,Y,W,H` lines, checked against a
+    /// `width × height` image.
+    pub fn resolve(&self, width: u32, height: u32) -> Result<Vec<Region>> {
+        let mut all = self.region.clone();
+        if let Some(p) = &self.regions {
+            let text = crate::error::read_text(p)?;
+            all.extend(Region::parse_list(&text).map_err(|message| Error::Scene {
+                path: p.to_path_buf(),
+                message,
+            })?);
+        }
+        for r in &all {
+            r.check(width, height).map_err(Error::Settings)?;
+        }
+        Ok(all)
     }
-    Ok(all)
 }
 
 /// The paths among `flags` that were given, each with its flag (for

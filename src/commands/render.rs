@@ -2,52 +2,72 @@
 //! `[render]` defaults over the built-in ones), in passes, a shard, under a time limit or a stop
 //! flag, and write the image (EXR with metadata, or PNG) and, if asked, the variance image.
 
+use super::ImageArgs;
 use crate::analysis::plots::write_spp_map;
 use crate::error::{Error, Result};
 use crate::image_io::{check_image_path, check_outputs, Format, NamedPath};
+use crate::limits::{parse_exposure, parse_gain, parse_seconds, parse_shard, parse_threads};
 use crate::output::{write_render, EstimateRecord, RenderMetadata};
 use crate::render::{
-    render_passes, shard_range, PassPlan, Progress, RenderSettings, RenderStats, ACTING_REPLICATES,
+    render_passes, shard_range, PassPlan, Progress, RenderSettings, RenderStats, Rendered,
+    ACTING_REPLICATES,
 };
 use crate::scene::{self, Scene};
-use crate::strategy::Strategy;
+use crate::strategy::StrategyArgs;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
-/// What to render and where to write it; `None` takes the scene's default, then the built-in.
-#[derive(Clone, Debug, Default)]
+/// What to render and where to write it: `vrpt render`'s flags. Each `None` takes the scene's
+/// default, then the built-in one.
+#[derive(Clone, Debug, Default, clap::Args)]
 pub struct RenderRequest {
-    /// An `.obj`, a `scene.toml`, or a folder holding a `scene.toml`.
+    /// The scene: an .obj file, a scene.toml, or a folder holding a scene.toml.
     pub scene: PathBuf,
-    /// `.png` or `.exr`; default `SCENE-NAME.png` in the current folder ([`default_output`]).
+    /// Output: .png (tone-mapped sRGB) or .exr (linear, with metadata); default SCENE-NAME.png
+    /// in the current folder.
+    #[arg(short, long)]
     pub output: Option<PathBuf>,
-    pub width: Option<u32>,
-    pub height: Option<u32>,
-    pub spp: Option<u32>,
-    pub max_depth: Option<u32>,
+    #[command(flatten)]
+    pub image: ImageArgs,
+    /// Seed of every random number: the same seed gives the same image.
+    #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// Index of the first sample: renders of 0..N and N..2N (same seed) merge into one of 2N.
+    #[arg(long, default_value_t = 0)]
     pub first_sample: u32,
-    pub strategy: Strategy,
-    /// Worker threads; `None`: all cores.
-    pub threads: Option<usize>,
-    /// Stop at the first whole pass that ends after this many seconds.
+    /// Stop at the first whole pass that ends after this many seconds (--spp is then a cap).
+    #[arg(long, value_name = "SECONDS", value_parser = parse_seconds, allow_negative_numbers = true)]
     pub time_limit: Option<f64>,
-    /// Samples per pixel per pass (default: all in one pass, or 16 with a time limit).
+    /// Samples per pixel per pass, the unit of stratification (default: all, or 16 with
+    /// --time-limit, whose passes then double while the time left allows).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     pub pass_spp: Option<u32>,
-    /// Render only shard `i` of `n`.
+    /// Render only shard I of N (from 0): samples ⌊I·spp/N⌋ .. ⌊(I+1)·spp/N⌋; `vrpt merge` of
+    /// all N equals one render of all (job arrays: examples/slurm, examples/kubernetes).
+    #[arg(long, value_name = "I/N", value_parser = parse_shard, conflicts_with_all = ["time_limit", "first_sample"])]
     pub shard: Option<(u32, u32)>,
-    /// Exposure of a PNG, in stops.
+    /// Worker threads (default: all cores). The image does not depend on it.
+    #[arg(long, value_parser = parse_threads)]
+    pub threads: Option<usize>,
+    #[command(flatten)]
+    pub strategy: StrategyArgs,
+    #[command(flatten)]
+    pub error: ErrorArgs,
+    /// Exposure of the PNG, in stops (pixels × 2^EXPOSURE before tone mapping), within ±64.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = parse_exposure)]
     pub exposure: f32,
-    /// Also write the variance of the mean to this EXR.
+    /// Also write the per-pixel variance of the mean to this EXR.
+    #[arg(long, value_name = "EXR")]
     pub variance: Option<PathBuf>,
-    /// Time the traversals ([`RenderStats::timing`]).
+    /// Also say where the time went: scene load, BVH build, traversal against shading (one ray
+    /// in 16 is timed, about 1% slower).
+    #[arg(long = "stats", conflicts_with = "quiet")]
     pub time_traces: bool,
     /// A flag that stops the render after its current batch (set by a signal handler).
+    #[arg(skip)]
     pub stop: Option<&'static AtomicBool>,
-    /// Replicates, adaptive sampling, a target error and the spp map.
-    pub error: ErrorArgs,
 }
 
 /// How a render estimates its error, and whether it acts on it (`vrpt render`'s flags).
@@ -77,14 +97,6 @@ pub struct ErrorArgs {
     /// Also write the samples of each pixel as a false-colour PNG with its colour bar.
     #[arg(long, value_name = "PNG")]
     pub spp_map: Option<PathBuf>,
-}
-
-/// A gain: a finite number ≥ 0.
-fn parse_gain(s: &str) -> std::result::Result<f64, String> {
-    match s.parse::<f64>() {
-        Ok(x) if x >= 0.0 && x.is_finite() => Ok(x),
-        _ => Err(format!("'{s}' is not a gain (a finite number ≥ 0)")),
-    }
 }
 
 /// The cap on spp of a `--target-error` render without `--spp`.
@@ -147,7 +159,42 @@ impl RenderRequest {
             .output
             .clone()
             .unwrap_or_else(|| default_output(&self.scene));
-        check_image_path(&output)?;
+        let outputs = self.check_outputs(&output)?;
+        let start = Instant::now();
+        let scene = scene::load(&self.scene)?;
+        let load_time = start.elapsed();
+        // and the files the scene was read from: its OBJ, environment map and textures
+        let read: Vec<NamedPath> = std::iter::once(scene.source.as_path())
+            .chain(scene.files.iter().map(PathBuf::as_path))
+            .map(|p| ("the scene's file", p))
+            .collect();
+        check_outputs(&outputs, &read)?;
+        let settings = self.settings(&scene)?;
+        let plan = self.plan(&settings)?;
+        let samples = match self.shard {
+            Some(s) => shard_range(settings.spp, s)?,
+            None => 0..settings.spp,
+        };
+        Ok(PreparedRender {
+            scene,
+            settings,
+            plan,
+            output,
+            load_time,
+            samples,
+            exposure: self.exposure,
+            variance: self.variance.clone(),
+            spp_map: self.error.spp_map.clone(),
+            time_limit: self.time_limit,
+            shard: self.shard,
+        })
+    }
+
+    /// The outputs (`output`, the variance image, the spp map), each of the right kind, none
+    /// the same file as another or as the scene's: the named paths, for the check against the
+    /// scene's files once it is loaded.
+    fn check_outputs<'a>(&'a self, output: &'a Path) -> Result<Vec<NamedPath<'a>>> {
+        check_image_path(output)?;
         if let Some(v) = &self.variance {
             if check_image_path(v)? != Format::Exr {
                 return Err(Error::Settings(format!(
@@ -165,7 +212,7 @@ impl RenderRequest {
             }
         }
         let outputs: Vec<NamedPath> = [
-            ("-o", Some(output.as_path())),
+            ("-o", Some(output)),
             ("--variance", self.variance.as_deref()),
             ("--spp-map", self.error.spp_map.as_deref()),
         ]
@@ -178,43 +225,36 @@ impl RenderRequest {
             inputs.push(("SCENE", toml.as_path()));
         }
         check_outputs(&outputs, &inputs)?;
-        let start = Instant::now();
-        let scene = scene::load(&self.scene)?;
-        let load_time = start.elapsed();
-        // and the files the scene was read from: its OBJ, environment map and textures
-        let read: Vec<NamedPath> = std::iter::once(scene.source.as_path())
-            .chain(scene.files.iter().map(PathBuf::as_path))
-            .map(|p| ("the scene's file", p))
-            .collect();
-        check_outputs(&outputs, &read)?;
-        let d = RenderSettings::for_scene(&scene);
-        let settings = RenderSettings {
-            width: self.width.unwrap_or(d.width),
-            height: self.height.unwrap_or(d.height),
-            spp: match (self.spp, self.error.target_error) {
-                (Some(s), _) => s,
-                (None, Some(_)) => TARGET_ERROR_SPP_CAP,
-                (None, None) => d.spp,
-            },
+        Ok(outputs)
+    }
+
+    /// The settings: the flags over the scene's defaults over the built-in ones; a target error
+    /// without `--spp` caps at [`TARGET_ERROR_SPP_CAP`], and a render that acts on its error
+    /// estimate takes [`ACTING_REPLICATES`] without `--replicates`.
+    fn settings(&self, scene: &Scene) -> Result<RenderSettings> {
+        let acting = self.error.adaptive || self.error.target_error.is_some();
+        let cap = self.error.target_error.map(|_| TARGET_ERROR_SPP_CAP);
+        Ok(RenderSettings {
             first_sample: self.first_sample,
-            max_depth: self.max_depth.unwrap_or(d.max_depth),
             seed: self.seed,
-            strategy: self.strategy,
+            strategy: self.strategy.resolve().map_err(Error::Settings)?,
             threads: self.threads,
             time_traces: self.time_traces,
-            guide_pdf_scale: 1.0,
-            replicates: self.error.replicates.unwrap_or(
-                if self.error.adaptive || self.error.target_error.is_some() {
-                    ACTING_REPLICATES
-                } else {
-                    1
-                },
-            ),
-        };
-        let plan = PassPlan {
-            pass_spp: self.pass_spp.or((self.time_limit.is_some()
-                || self.error.target_error.is_some())
-            .then(|| 16.min(settings.spp))),
+            replicates: (self.error.replicates).unwrap_or(if acting {
+                ACTING_REPLICATES
+            } else {
+                1
+            }),
+            ..self.image.settings(scene, cap)
+        })
+    }
+
+    /// The passes: `--pass-spp`, else 16 under a time limit or a target error (else one pass);
+    /// the time limit, shard, stop flag and adaptive rounds as asked.
+    fn plan(&self, settings: &RenderSettings) -> Result<PassPlan> {
+        let steady = self.time_limit.is_some() || self.error.target_error.is_some();
+        Ok(PassPlan {
+            pass_spp: self.pass_spp.or(steady.then(|| 16.min(settings.spp))),
             time_limit: self
                 .time_limit
                 .map(|t| crate::limits::duration("--time-limit", t))
@@ -224,23 +264,6 @@ impl RenderRequest {
             adaptive: self.error.adaptive,
             min_allocation_gain: self.error.min_allocation_gain,
             target_error: self.error.target_error,
-        };
-        let samples = match self.shard {
-            Some(s) => shard_range(settings.spp, s)?,
-            None => 0..settings.spp,
-        };
-        Ok(PreparedRender {
-            scene,
-            settings,
-            plan,
-            output,
-            load_time,
-            samples,
-            exposure: self.exposure,
-            variance: self.variance.clone(),
-            spp_map: self.error.spp_map.clone(),
-            time_limit: self.time_limit,
-            shard: self.shard,
         })
     }
 }
@@ -277,13 +300,19 @@ impl PreparedRender {
     pub fn run(self, progress: &dyn Progress) -> Result<RenderOutcome> {
         let r = render_passes(&self.scene, &self.settings, &self.plan, progress)?;
         let requested = self.samples.len() as u32;
+        // the sets of points the image holds: one where an adaptive render finished uniformly
+        // (its first round's few samples of R sets merged into one set's passes)
+        let sets = match r.finished_uniformly {
+            Some(_) => 1,
+            None => self.settings.replicates,
+        };
         let settings = RenderSettings {
             spp: r.spp,
             first_sample: r.first_sample,
             ..self.settings
         };
         let meta = RenderMetadata {
-            estimate: Some(EstimateRecord::new(self.settings.replicates, &r.estimate)),
+            estimate: Some(EstimateRecord::new(sets, &r.estimate)),
             adaptive_rounds: r.rounds,
             target_error: self.plan.target_error,
             pass_spp: self.plan.pass_spp,
@@ -303,42 +332,8 @@ impl PreparedRender {
         if let Some(p) = &self.spp_map {
             write_spp_map(p, &r.film.sample_counts(), (r.film.width, r.film.height))?;
         }
-        let adaptive = match r.rounds {
-            Some(n) => format!(
-                "adaptive: {n} rounds{}, {} to {} samples per pixel\n",
-                match r.uniform_rounds {
-                    0 => String::new(),
-                    u =>
-                        format!(
-                        " ({u} of them uniform: the cross-validated gain of allocating from the \
-                         rounds before was below {})",
-                        self.plan.min_allocation_gain.unwrap_or(crate::estimate::ALLOCATE_ABOVE)
-                    ),
-                },
-                r.film.sample_counts().iter().min().copied().unwrap_or(0),
-                r.film.sample_counts().iter().max().copied().unwrap_or(0)
-            ),
-            None => String::new(),
-        } + &r.finished_uniformly.map_or(String::new(), |gain| {
-            format!(
-                "adaptive: after the first round the cross-validated gain of allocating was \
-                 {gain:.2}, below {}: the rest rendered as uniform passes of one set of points\n",
-                self.plan
-                    .min_allocation_gain
-                    .unwrap_or(crate::estimate::ALLOCATE_ABOVE)
-            )
-        }) + &r.allocation.map_or(String::new(), |g| {
-            format!(
-                "adaptive: relMSE gain over uniform at equal spp, bounds from this image: ideal \
-                 (n ∝ e) {:.2}, this schedule (first round {:.0}%, uniform share {:.0}%) {:.2}; \
-                 a round allocated from estimates this noisy, cross-validated {:.2}\n",
-                g.ideal,
-                100.0 * g.first_share,
-                100.0 * crate::estimate::UNIFORM_SHARE,
-                g.schedule,
-                g.cross_validated
-            )
-        });
+        let bar = (self.plan.min_allocation_gain).unwrap_or(crate::estimate::ALLOCATE_ABOVE);
+        let adaptive = adaptive_summary(&r, bar);
         Ok(RenderOutcome {
             summary: r.stats.summary(&self.scene, &settings) + &adaptive + &r.estimate.summary(),
             timing: r.stats.timing(self.load_time, self.scene.accel.build_time),
@@ -349,4 +344,47 @@ impl PreparedRender {
             interrupted: r.interrupted,
         })
     }
+}
+
+/// What an adaptive render did, in a line or three (empty for a uniform render): its rounds
+/// and the range of samples per pixel, the rounds that gave every pixel the same because the
+/// cross-validated gain of allocating was below `bar`, or that it finished uniformly, and its
+/// bounds on the gain over uniform sampling.
+fn adaptive_summary(r: &Rendered, bar: f64) -> String {
+    let mut text = String::new();
+    if let Some(n) = r.rounds {
+        let counts = r.film.sample_counts();
+        let (lo, hi) = (counts.iter().min(), counts.iter().max());
+        let uniform = match r.uniform_rounds {
+            0 => String::new(),
+            u => format!(
+                " ({u} of them uniform: the cross-validated gain of allocating from the rounds \
+                 before was below {bar})"
+            ),
+        };
+        text += &format!(
+            "adaptive: {n} rounds{uniform}, {} to {} samples per pixel\n",
+            lo.copied().unwrap_or(0),
+            hi.copied().unwrap_or(0)
+        );
+    }
+    if let Some(gain) = r.finished_uniformly {
+        text += &format!(
+            "adaptive: after the first round the cross-validated gain of allocating was \
+             {gain:.2}, below {bar}: the rest rendered as uniform passes of one set of points\n"
+        );
+    }
+    if let Some(g) = &r.allocation {
+        text += &format!(
+            "adaptive: relMSE gain over uniform at equal spp, bounds from this image: ideal \
+             (n ∝ e) {:.2}, this schedule (first round {:.0}%, uniform share {:.0}%) {:.2}; a \
+             round allocated from estimates this noisy, cross-validated {:.2}\n",
+            g.ideal,
+            100.0 * g.first_share,
+            100.0 * crate::estimate::UNIFORM_SHARE,
+            g.schedule,
+            g.cross_validated
+        );
+    }
+    text
 }

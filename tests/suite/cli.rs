@@ -920,7 +920,8 @@ fn adaptive_rounds_stop_at_the_last_sample_index() {
 
 /// `--min-allocation-gain`: a render whose first round says allocating cannot pay (here the
 /// bar is set out of reach) says so and finishes as uniform passes of one set: every pixel the
-/// requested spp, the per-sample estimate, one adaptive round in the metadata. The flag needs
+/// requested spp, the per-sample estimate of one set (and the metadata records one replicate
+/// and `per-sample`, not the first round's four), one adaptive round in the metadata. The flag needs
 /// `--adaptive` and a finite gain ≥ 0, each refused in one line.
 #[test]
 fn adaptive_renders_finish_uniformly_where_allocating_cannot_pay() {
@@ -953,6 +954,11 @@ fn adaptive_renders_finish_uniformly_where_allocating_cannot_pay() {
     let img = vrpt::image_io::read_exr(&exr).unwrap();
     let meta = vrpt::output::RenderMetadata::require(&img, &exr).unwrap();
     assert_eq!((meta.spp, meta.adaptive_rounds), (64, Some(1)));
+    let e = meta.estimate.expect("the estimate's keys");
+    assert_eq!(
+        (e.replicates, e.method),
+        (1, vrpt::output::EstimateMethod::PerSample)
+    );
     assert!(img.samples.unwrap().iter().all(|&n| n == 64));
     assert_one_line_error(
         &vrpt(&[&args[..], &["--min-allocation-gain", "-1"]].concat()),

@@ -316,10 +316,12 @@ fn defaults_keep_their_error_on_the_cornell_box() {
     );
     let request = RenderRequest {
         scene: common::cornell_path(),
-        width: Some(64),
-        height: Some(64),
-        spp: Some(64),
-        strategy: Strategy::from_parts(None, (None, None, None), (None, None)).unwrap(),
+        image: vrpt::commands::ImageArgs {
+            width: Some(64),
+            height: Some(64),
+            spp: Some(64),
+            max_depth: None,
+        },
         ..Default::default()
     };
     let defaults = request.prepare().unwrap();
