@@ -52,15 +52,17 @@ use crate::environment::{EnvMap, Environment};
 use crate::math::Frame;
 use crate::sampling::{
     bilinear_pdf, cosine_hemisphere_pdf, sample_bilinear, sample_cosine_hemisphere,
-    sample_uniform_triangle, Discrete, SphericalRectangle, SphericalTriangle, UNIT_BITS,
+    sample_uniform_triangle, Discrete, SphericalRectangle, SphericalTriangle, UNITS,
 };
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
 use std::sync::OnceLock;
 
+mod choice;
 mod emitter;
 mod sampler;
 mod tree;
+pub use choice::{Choice, ChooseLight, TableChoice, TreeChoice};
 use emitter::{area_pdf, pair_rectangles, Spherical};
 pub use emitter::{Emitter, Shape, PAIR_CANDIDATES};
 pub use sampler::{Chosen, LightSampler};
@@ -95,8 +97,8 @@ pub enum LightPoints {
     /// The solid-angle map warped by the receiver's cosine at the corners (bilinear).
     Projected,
     /// Per light and receiver: `projected` where the light looks large from the receiver
-    /// (`A cosθ_l/d² ≥` [`AUTO_SOLID_ANGLE`] at its centre), `area` where it looks small and
-    /// the two place points alike at a fraction of the cost.
+    /// (`A cosθ_l/d² ≥ 0.1 sr` at its centre, `AUTO_SOLID_ANGLE`), `area` where it looks small
+    /// and the two place points alike at a fraction of the cost.
     #[default]
     Auto,
 }
@@ -143,8 +145,6 @@ pub const AUTO_SOLID_ANGLE: f32 = 0.1;
 
 /// Index in the primitive → emitter map of a primitive that is no light.
 const NO_LIGHT: u32 = u32::MAX;
-/// The units of `u`'s resolution that a choice splits.
-const UNITS: u32 = 1 << UNIT_BITS;
 
 /// A sampled light direction.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -247,13 +247,23 @@ impl Lights {
         self.tree.get_or_init(|| LightTree::build(&self.emitters))
     }
 
-    /// How lights are sampled with `points` and `choice`.
+    /// How lights are sampled with `points` and `choice` (the tree needs an emitter: without
+    /// one it chooses by power).
     pub fn sampler(&self, points: LightPoints, choice: LightChoice) -> LightSampler<'_> {
+        let n = self.emitters.len() as u32;
+        let choice = match choice {
+            LightChoice::Uniform => Choice::Table(TableChoice::new(&self.uniform, n)),
+            LightChoice::Tree if n > 0 => {
+                Choice::Tree(TreeChoice::new(self.tree(), self.environment_units))
+            }
+            LightChoice::Power | LightChoice::Tree => {
+                Choice::Table(TableChoice::new(&self.by_power, n))
+            }
+        };
         LightSampler {
             lights: self,
             points,
             choice,
-            tree: (choice == LightChoice::Tree && !self.emitters.is_empty()).then(|| self.tree()),
         }
     }
 }

@@ -1,16 +1,15 @@
-//! [`LightSampler`]: a light chosen (uniform, power or the tree) and a point on it (area, solid
-//! angle or projected), with the pdf per solid angle of any direction (see the
+//! [`LightSampler`]: a light chosen (by a [`Choice`]: uniform, power or the tree) and a point on
+//! it (area, solid angle or projected), with the pdf per solid angle of any direction (see the
 //! [module above](super)).
 
 use super::*;
 
-/// How the lights are sampled in one render: the points method, the choice, and the tree.
+/// How the lights are sampled in one render: the points method and the chooser.
 #[derive(Clone, Copy, Debug)]
 pub struct LightSampler<'a> {
     pub(super) lights: &'a Lights,
     pub(super) points: LightPoints,
-    pub(super) choice: LightChoice,
-    pub(super) tree: Option<&'a LightTree>,
+    pub(super) choice: Choice<'a>,
 }
 
 /// A chosen light: emitter `i`, or the environment.
@@ -30,59 +29,19 @@ impl LightSampler<'_> {
     /// (exactly the frequency of this choice from `p`). `None`: nothing to choose from here.
     #[inline]
     pub fn choose(&self, p: Vec3, n: Vec3, u: f32) -> Option<(Chosen, f32)> {
-        let l = self.lights;
-        let as_light = |i: usize| {
-            if i < l.emitters.len() {
-                Chosen::Emitter(i as u32)
-            } else {
-                Chosen::Environment
-            }
-        };
-        match (self.choice, self.tree) {
-            (LightChoice::Power, _) | (LightChoice::Tree, None) => l
-                .by_power
-                .sample(u)
-                .map(|i| (as_light(i), l.by_power.pmf(i))),
-            (LightChoice::Uniform, _) => {
-                l.uniform.sample(u).map(|i| (as_light(i), l.uniform.pmf(i)))
-            }
-            (LightChoice::Tree, Some(tree)) => {
-                let k = ((u * UNITS as f32) as u32).min(UNITS - 1);
-                if k < l.environment_units {
-                    return Some((
-                        Chosen::Environment,
-                        l.environment_units as f32 / UNITS as f32,
-                    ));
-                }
-                let (i, units) = tree.choose(p, n, k, l.environment_units..UNITS)?;
-                Some((Chosen::Emitter(i), units as f32 / UNITS as f32))
-            }
-        }
+        self.choice.choose(p, n, u)
     }
 
     /// The probability that [`LightSampler::choose`] picks emitter `i` for `(p, n)`.
     #[inline]
     pub fn pmf(&self, p: Vec3, n: Vec3, i: u32) -> f32 {
-        let l = self.lights;
-        match (self.choice, self.tree) {
-            (LightChoice::Power, _) | (LightChoice::Tree, None) => l.by_power.pmf(i as usize),
-            (LightChoice::Uniform, _) => l.uniform.pmf(i as usize),
-            (LightChoice::Tree, Some(tree)) => {
-                tree.units(p, n, i, l.environment_units..UNITS) as f32 / UNITS as f32
-            }
-        }
+        self.choice.pmf(p, n, i)
     }
 
     /// The probability of choosing the environment.
     #[inline]
     pub fn environment_pmf(&self) -> f32 {
-        let l = self.lights;
-        let last = l.emitters.len();
-        match (self.choice, self.tree) {
-            (LightChoice::Power, _) | (LightChoice::Tree, None) => l.by_power.pmf(last),
-            (LightChoice::Uniform, _) => l.uniform.pmf(last),
-            (LightChoice::Tree, Some(_)) => l.environment_units as f32 / UNITS as f32,
-        }
+        self.choice.environment_pmf()
     }
 
     /// Sample a light for the point `p` with shading normal `n` (on the side light is gathered

@@ -133,7 +133,8 @@ pub fn uniform_triangle_pdf(area: f32) -> f32 {
 /// Bits of resolution of a 1D sample `u ∈ [0, 1)`: every sampler's values are (at least) this
 /// fine, so `⌊u·2²⁴⌋` is uniform on `0..2²⁴`.
 pub const UNIT_BITS: u32 = 24;
-const UNITS: u32 = 1 << UNIT_BITS;
+/// The units of `u`'s resolution, `2^UNIT_BITS`, that an exact choice splits.
+pub const UNITS: u32 = 1 << UNIT_BITS;
 
 /// A discrete distribution over `0..n` with probabilities approximately proportional to given
 /// weights, whose pmf is **exactly** the probability with which [`Discrete::sample`] returns
