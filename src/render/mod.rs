@@ -461,17 +461,14 @@ pub fn render_passes_with<F: SamplerFactory>(
             trainer.train(start, &mut stats)
         });
         let training = start.elapsed();
+        let guide = Guide {
+            tree: tree.as_ref(),
+            record: false,
+        };
         let job = Job {
-            scene,
-            camera: &camera,
+            kernel: Kernel::new(scene, &camera, settings, factory, guide, progress),
             settings,
             plan,
-            factory,
-            guide: Guide {
-                tree: tree.as_ref(),
-                record: false,
-            },
-            progress,
             start,
         };
         let mut r = if plan.adaptive {
@@ -498,15 +495,12 @@ pub fn replicate_seed(seed: u64, r: u32) -> u64 {
     }
 }
 
-/// What every pass of a render shares.
+/// What every pass of a render shares: the kernel its batches render with, its settings, its
+/// plan and when it began.
 struct Job<'a, F: SamplerFactory> {
-    scene: &'a Scene,
-    camera: &'a Camera,
+    kernel: Kernel<'a, F>,
     settings: &'a RenderSettings,
     plan: &'a PassPlan,
-    factory: &'a F,
-    guide: Guide<'a>,
-    progress: &'a dyn Progress,
     start: Instant,
 }
 
@@ -526,18 +520,9 @@ impl<F: SamplerFactory> Job<'_, F> {
         film: &mut Film,
         stats: &mut RenderStats,
     ) -> (Option<f64>, bool) {
-        let settings = RenderSettings {
-            seed: replicate_seed(self.settings.seed, rep),
-            ..self.settings.clone()
-        };
-        let kernel = Kernel::new(
-            self.scene,
-            self.camera,
-            &settings,
-            self.factory,
-            self.guide,
-            self.progress,
-        );
+        let kernel = self
+            .kernel
+            .with_seed(replicate_seed(self.settings.seed, rep));
         let batch = Batch {
             samples,
             tiles: 0..tile_count(self.settings),

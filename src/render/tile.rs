@@ -64,8 +64,8 @@ pub(super) struct BatchOutput {
     pub(super) total: DVec3,
 }
 
-/// What the tile kernel renders with: the scene seen by the camera, with `settings` (whose seed
-/// is the batch's), the samplers `factory` makes, the guide, and a progress to advance.
+/// What the tile kernel renders with: the scene seen by the camera, with `settings` and the
+/// samplers `factory` makes with seed `seed`, the guide, and a progress to advance.
 pub(super) struct Kernel<'a, F: SamplerFactory> {
     scene: &'a Scene,
     camera: &'a Camera,
@@ -74,13 +74,21 @@ pub(super) struct Kernel<'a, F: SamplerFactory> {
     factory: &'a F,
     guide: Guide<'a>,
     progress: &'a dyn Progress,
+    seed: u64,
 }
+
+impl<F: SamplerFactory> Clone for Kernel<'_, F> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+impl<F: SamplerFactory> Copy for Kernel<'_, F> {}
 
 /// A pixel's running sums: Σ L, Σ L², and the finite samples' count.
 type Sums = (DVec3, DVec3, u64);
 
 impl<'a, F: SamplerFactory> Kernel<'a, F> {
-    /// The kernel of a render of `scene` through `camera` with `settings`.
+    /// The kernel of a render of `scene` through `camera` with `settings` (and its seed).
     pub(super) fn new(
         scene: &'a Scene,
         camera: &'a Camera,
@@ -97,7 +105,13 @@ impl<'a, F: SamplerFactory> Kernel<'a, F> {
             factory,
             guide,
             progress,
+            seed: settings.seed,
         }
+    }
+
+    /// The same kernel with the samplers of seed `seed` (a replicate's, a training iteration's).
+    pub(super) fn with_seed(self, seed: u64) -> Self {
+        Kernel { seed, ..self }
     }
 
     /// Render `batch` (sample indices below [`SAMPLE_INDICES`]) into `film`, going on from the
@@ -112,7 +126,7 @@ impl<'a, F: SamplerFactory> Kernel<'a, F> {
             Samples::Pass { set, .. } => *set,
             Samples::Own(_) => SamplePass { origin: 0, size: 1 },
         };
-        let sampler = self.factory.make(self.settings.seed, set);
+        let sampler = self.factory.make(self.seed, set);
         let tiles: Vec<Tile> = batch
             .tiles
             .clone()
@@ -157,7 +171,7 @@ impl<'a, F: SamplerFactory> Kernel<'a, F> {
                             origin: a.origin[i] as u32,
                             size: a.count[i],
                         };
-                        *sampler = self.factory.make(self.settings.seed, set);
+                        *sampler = self.factory.make(self.seed, set);
                         a.origin[i]..a.origin[i] + a.count[i] as u64
                     }
                 };

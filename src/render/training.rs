@@ -61,12 +61,8 @@ impl<F: SamplerFactory> Trainer<'_, F> {
     fn iteration(&self, k: u32, tree: &mut SdTree, stats: &mut RenderStats) -> bool {
         let settings = self.settings;
         let spp = 1u64 << k;
-        let iteration = RenderSettings {
-            seed: crate::math::mix64(
-                settings.seed ^ (k as u64 + 1).wrapping_mul(0x9e37_79b9_7f4a_7c15),
-            ),
-            ..settings.clone()
-        };
+        let seed =
+            crate::math::mix64(settings.seed ^ (k as u64 + 1).wrapping_mul(0x9e37_79b9_7f4a_7c15));
         let set = SamplePass {
             origin: 0,
             size: spp as u32,
@@ -81,11 +77,12 @@ impl<F: SamplerFactory> Trainer<'_, F> {
             let kernel = Kernel::new(
                 self.scene,
                 self.camera,
-                &iteration,
+                settings,
                 self.factory,
                 guide,
                 &NoProgress,
-            );
+            )
+            .with_seed(seed);
             let results: Vec<BatchOutput> = pieces
                 .into_par_iter()
                 .map(|range| {
