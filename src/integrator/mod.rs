@@ -76,10 +76,6 @@ pub struct IntegratorSettings {
     /// Time one traversal (closest hit or shadow ray) in every [`TIMED_RAY_EVERY`] into
     /// [`RayCounts::trace_ns`]; off unless asked for (`vrpt render --stats`).
     pub time_traces: bool,
-    /// Factor on the guided mixture pdf the estimator divides by: 1, except in the tests that
-    /// show a wrong pdf is caught.
-    #[doc(hidden)]
-    pub guide_pdf_scale: f32,
 }
 
 /// Rays traced, by kind.
@@ -466,7 +462,7 @@ impl<'a> Path<'a> {
             let c = dir_to_canonical(wi);
             (wi, c, bs.wi, bs.f, bs.pdf, g.guide_pdf_canonical(c))
         };
-        let pdf = g.mixture(p_guide, p_bsdf) * self.settings.guide_pdf_scale;
+        let pdf = g.mixture(p_guide, p_bsdf);
         if !(pdf > 0.0 && pdf.is_finite()) {
             return None;
         }

@@ -69,9 +69,6 @@ pub struct RenderSettings {
     pub threads: Option<usize>,
     /// Time the traversals for [`RenderStats::timing`] (one ray in 16; off by default).
     pub time_traces: bool,
-    /// Factor on the guided pdf (1): for the tests that show a wrong pdf is caught.
-    #[doc(hidden)]
-    pub guide_pdf_scale: f32,
     /// Independent randomizations of every pixel (seeds [`replicate_seed`]), whose spread
     /// estimates the image's error ([`crate::estimate`]); 1 renders one set per pass, and the
     /// error is then estimated per sample. `vrpt render` defaults to 1, and to
@@ -97,7 +94,6 @@ impl Default for RenderSettings {
             strategy: Strategy::default(),
             threads: None,
             time_traces: false,
-            guide_pdf_scale: 1.0,
             replicates: 1,
         }
     }
@@ -113,7 +109,6 @@ impl RenderSettings {
             light_points: self.strategy.light_points,
             light_choice: self.strategy.light_choice,
             time_traces: self.time_traces,
-            guide_pdf_scale: self.guide_pdf_scale,
         }
     }
 

@@ -268,7 +268,6 @@ fn run_settings(st: &Entry, s: &ExperimentSettings, spp: u32, seed: u64) -> Rend
         strategy: st.strategy,
         threads: None,
         time_traces: false,
-        guide_pdf_scale: 1.0,
         replicates: st.replicates,
     }
 }
