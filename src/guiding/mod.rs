@@ -139,6 +139,12 @@ pub struct Record {
     pub p_guide: f32,
 }
 
+/// The guide a render learns and samples with: the SD-tree. Outside `guiding` the renderer
+/// names only this and [`GuideAt`], and calls only their functions (`new`, `add_records`,
+/// `finish_iteration`, `set_image_mean`, `size`; at a vertex `sample`, the pdfs, `survival`,
+/// `splat_leaf`), so a second guide is an enum behind this name with those functions: one room.
+pub type Guide = SdTree;
+
 /// The guide at one vertex: the leaf's distribution and `α`.
 #[derive(Clone, Copy, Debug)]
 pub struct GuideAt<'a> {
@@ -184,6 +190,21 @@ impl<'a> GuideAt<'a> {
     pub fn mixture_pdf_canonical(&self, c: Vec2, p_bsdf: f32) -> (f32, f32) {
         let p_guide = self.guide_pdf_canonical(c);
         (self.mixture(p_guide, p_bsdf), p_guide)
+    }
+
+    /// A direction drawn from the guide by `u`: its canonical point and the guide's pdf of it
+    /// per unit solid angle (from the descent that drew it).
+    #[inline]
+    pub fn sample(&self, u: Vec2) -> (Vec2, f32) {
+        let (c, p_c) = self.dtree.sample_canonical_pdf(u);
+        (c, p_c * Self::PER_STERADIAN)
+    }
+
+    /// The leaf a training record at `p` is splatted into, `jitter` in `[0, 1)³` spreading it
+    /// over a box the size of its leaf ([`SdTree::splat_leaf`]).
+    #[inline]
+    pub fn splat_leaf(&self, p: Vec3, jitter: Vec3) -> u32 {
+        self.tree.splat_leaf(p, jitter)
     }
 
     /// A density per unit area of the canonical square, per unit solid angle: `1/4π`.

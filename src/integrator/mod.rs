@@ -52,7 +52,7 @@ use recorder::{Mixture, PathRecorder, Training};
 
 use crate::accel::TraceStack;
 use crate::bsdf::{Bsdf, BsdfSample, Directions};
-use crate::guiding::{canonical_to_dir, dir_to_canonical, GuideAt, Record, SdTree};
+use crate::guiding::{canonical_to_dir, dir_to_canonical, Guide, GuideAt, Record};
 use crate::lights::{LightChoice, LightPoints, LightSampler, LightStrategy};
 use crate::math::Frame;
 use crate::sampler::layout::BounceSample;
@@ -274,7 +274,7 @@ pub fn radiance_guided<S: Sampler>(
     settings: &IntegratorSettings,
     rays: &mut RayCounts,
     stack: &mut TraceStack,
-    guide: Option<&SdTree>,
+    guide: Option<&Guide>,
     records: Option<&mut Vec<Record>>,
 ) -> Vec3 {
     let path = Path::new(scene, settings, guide);
@@ -290,13 +290,13 @@ struct Path<'a> {
     scene: &'a Scene,
     settings: &'a IntegratorSettings,
     lights: LightSampler<'a>,
-    guide: Option<&'a SdTree>,
+    guide: Option<&'a Guide>,
     /// Whether vertices take a light sample (`nee` or `mis`, and the scene has a light).
     sample_lights: bool,
 }
 
 impl<'a> Path<'a> {
-    fn new(scene: &'a Scene, settings: &'a IntegratorSettings, guide: Option<&'a SdTree>) -> Self {
+    fn new(scene: &'a Scene, settings: &'a IntegratorSettings, guide: Option<&'a Guide>) -> Self {
         let lights = scene
             .lights
             .sampler(settings.light_points, settings.light_choice);
@@ -447,7 +447,7 @@ impl<'a> Path<'a> {
         };
         let (wi, c, wi_local, f, p_bsdf, p_guide) = if u.guide < g.alpha {
             // the density comes from the descent that drew the point
-            let (c, p_c) = g.dtree.sample_canonical_pdf(u.guided_direction);
+            let (c, p_guide) = g.sample(u.guided_direction);
             let wi = canonical_to_dir(c);
             let wi_local = v.frame.to_local(wi);
             if wi_local.z <= 0.0 {
@@ -455,7 +455,7 @@ impl<'a> Path<'a> {
             }
             let p_bsdf = bsdf.pdf(v.wo_local, wi_local, directions);
             let f = bsdf.eval(v.wo_local, wi_local);
-            (wi, c, wi_local, f, p_bsdf, p_c * GuideAt::PER_STERADIAN)
+            (wi, c, wi_local, f, p_bsdf, p_guide)
         } else {
             let bs = bsdf.sample(v.wo_local, u.lobe, u.direction, directions)?;
             let wi = v.frame.to_world(bs.wi);

@@ -95,7 +95,7 @@ impl PathRecorder for Training<'_> {
             crate::math::u64_to_unit_f32(crate::math::mix64(h ^ 2)),
         );
         self.pending[self.n] = Pending {
-            leaf: g.tree.splat_leaf(p, jitter),
+            leaf: g.splat_leaf(p, jitter),
             point: c,
             beta,
             l_start: l,

@@ -19,7 +19,7 @@ use crate::camera::Camera;
 use crate::error::{Error, Result};
 use crate::estimate::{self, ErrorEstimate, Replicates};
 use crate::film::Film;
-use crate::guiding::{Record, SdTree, TreeSize};
+use crate::guiding::{Guide, Record, TreeSize};
 use crate::integrator::{radiance_guided, IntegratorSettings, RayCounts};
 use crate::sampler::layout::CameraSample;
 use crate::sampler::{IndependentSampler, Sampler, SamplerKind, SobolSampler, StratifiedSampler};
@@ -262,8 +262,8 @@ pub(crate) fn with_sampler<W: WithSampler>(kind: SamplerKind, work: W) -> W::Out
 
 /// The guide a render samples with, and whether it records for the next one.
 #[derive(Clone, Copy)]
-struct Guide<'a> {
-    tree: Option<&'a SdTree>,
+struct Guiding<'a> {
+    tree: Option<&'a Guide>,
     record: bool,
 }
 
@@ -456,7 +456,7 @@ pub fn render_passes_with<F: SamplerFactory>(
             trainer.train(start, &mut stats)
         });
         let training = start.elapsed();
-        let guide = Guide {
+        let guide = Guiding {
             tree: tree.as_ref(),
             record: false,
         };

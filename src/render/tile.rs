@@ -72,7 +72,7 @@ pub(super) struct Kernel<'a, F: SamplerFactory> {
     settings: &'a RenderSettings,
     integrator: IntegratorSettings,
     factory: &'a F,
-    guide: Guide<'a>,
+    guide: Guiding<'a>,
     progress: &'a dyn Progress,
     seed: u64,
 }
@@ -94,7 +94,7 @@ impl<'a, F: SamplerFactory> Kernel<'a, F> {
         camera: &'a Camera,
         settings: &'a RenderSettings,
         factory: &'a F,
-        guide: Guide<'a>,
+        guide: Guiding<'a>,
         progress: &'a dyn Progress,
     ) -> Self {
         Kernel {

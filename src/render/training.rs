@@ -22,9 +22,9 @@ impl<F: SamplerFactory> Trainer<'_, F> {
     /// with a time limit while the next iteration (estimated at twice the last) would end within
     /// a third of it (the render began at `start`). A set stop flag ends the training.
     /// Training's rays and thread time are added to `stats`, and its [`GuideStats`] set there.
-    pub(super) fn train(&self, start: Instant, stats: &mut RenderStats) -> SdTree {
+    pub(super) fn train(&self, start: Instant, stats: &mut RenderStats) -> Guide {
         let (lo, hi) = scene_bounds(self.scene);
-        let mut tree = SdTree::new(lo, hi);
+        let mut tree = Guide::new(lo, hi);
         let budget = (self.settings.spp as u64 / 2).max(1);
         let mut g = GuideStats::default();
         let mut last = Duration::ZERO;
@@ -58,7 +58,7 @@ impl<F: SamplerFactory> Trainer<'_, F> {
     /// `mix64(seed ⊕ (k + 1)·φ)`, whatever the render's first sample or shard: every shard of a
     /// render learns the same tree. False when the stop flag cut it (its last chunk's records
     /// dropped, the tree not refined).
-    fn iteration(&self, k: u32, tree: &mut SdTree, stats: &mut RenderStats) -> bool {
+    fn iteration(&self, k: u32, tree: &mut Guide, stats: &mut RenderStats) -> bool {
         let settings = self.settings;
         let spp = 1u64 << k;
         let seed =
@@ -70,7 +70,7 @@ impl<F: SamplerFactory> Trainer<'_, F> {
         let (mut sum, mut n_samples) = (glam::DVec3::ZERO, 0u64);
         for (tiles, samples) in training_chunks(tile_count(settings), spp) {
             let pieces = sample_pieces(&tiles, samples);
-            let guide = Guide {
+            let guide = Guiding {
                 tree: Some(&*tree),
                 record: true,
             };
@@ -161,7 +161,7 @@ fn sample_pieces(tiles: &Range<u32>, samples: Range<u64>) -> Vec<Range<u64>> {
 
 /// The guide a guided render of `scene` with `settings` learns before its final iteration (the
 /// same seeds and budget: the same tree), with the training's stats.
-pub fn learn_guide(scene: &Scene, settings: &RenderSettings) -> Result<(SdTree, RenderStats)> {
+pub fn learn_guide(scene: &Scene, settings: &RenderSettings) -> Result<(Guide, RenderStats)> {
     let camera = camera_for(scene, settings)?;
     with_threads(settings.threads, || {
         let mut stats = RenderStats::default();
@@ -174,8 +174,8 @@ pub fn learn_guide(scene: &Scene, settings: &RenderSettings) -> Result<(SdTree, 
             &'a mut RenderStats,
         );
         impl WithSampler for Train<'_> {
-            type Out = SdTree;
-            fn run<F: SamplerFactory>(self, factory: &F) -> SdTree {
+            type Out = Guide;
+            fn run<F: SamplerFactory>(self, factory: &F) -> Guide {
                 let plan = PassPlan::default();
                 let trainer = Trainer {
                     scene: self.0,
