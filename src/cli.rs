@@ -1,7 +1,7 @@
 //! The command line (the binary's side): the commands, each taking its library request as its
 //! flags ([`vrpt::commands`]: the argument struct is the request), `--quiet` where a command
-//! shows progress, progress bars, and printing the outcomes. Errors come back to `main` as one
-//! line.
+//! shows progress (`Quiet`; `RenderArgs`, whose `--quiet` also hides the statistics), progress
+//! bars, and printing the outcomes. Errors come back to `main` as one line.
 
 use clap::{Args, Parser, Subcommand};
 use std::io::IsTerminal;
@@ -23,7 +23,7 @@ pub struct Cli {
 #[derive(Debug, Subcommand)]
 pub enum Command {
     /// Render a scene to an EXR (linear, with metadata) or PNG (tone-mapped sRGB).
-    Render(Quiet<render::RenderRequest>),
+    Render(RenderArgs),
     /// Merge renders of the same scene and settings (other seeds or sample ranges) into one.
     Merge(merge::MergeRequest),
     /// Print the error metrics of an EXR against a reference EXR; optionally write an error map.
@@ -38,17 +38,28 @@ pub enum Command {
     Integrate(vrpt::commands::integrate::IntegrateRequest),
     /// Test every warp's samples against its integrated pdf: chi-square, p-value and ∫pdf.
     Warptest(vrpt::commands::warptest::WarptestRequest),
-    /// Show what path guiding learned at a pixel's first hit, beside the incident radiance there.
+    /// Show what path guiding learned at a pixel's first hit, beside the incident radiance there
+    /// (the guide of a render of --spp, whose training takes about half of them).
     Guide(vrpt::commands::guide::GuideRequest),
 }
 
-/// A command's request, and whether to keep quiet on the terminal.
+/// An experiment's request, and whether to show its progress bar.
 #[derive(Debug, Clone, Args)]
 pub struct Quiet<R: Args> {
     #[command(flatten)]
     pub request: R,
-    /// No progress bar and no statistics (errors and warnings still print).
+    /// No progress bar.
     #[arg(short, long)]
+    pub quiet: bool,
+}
+
+/// `vrpt render`: its request, and whether to keep quiet on the terminal.
+#[derive(Debug, Clone, Args)]
+pub struct RenderArgs {
+    #[command(flatten)]
+    pub request: render::RenderRequest,
+    /// No progress bar and no statistics (errors and warnings still print).
+    #[arg(short, long, conflicts_with = "time_traces")]
     pub quiet: bool,
 }
 
@@ -121,7 +132,7 @@ impl Drop for Bar {
     }
 }
 
-fn run_render(args: Quiet<render::RenderRequest>) -> Result<ExitCode> {
+fn run_render(args: RenderArgs) -> Result<ExitCode> {
     crate::GRACEFUL.store(true, std::sync::atomic::Ordering::SeqCst);
     let request = render::RenderRequest {
         stop: Some(&crate::STOP),

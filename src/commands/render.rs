@@ -63,7 +63,7 @@ pub struct RenderRequest {
     pub variance: Option<PathBuf>,
     /// Also say where the time went: scene load, BVH build, traversal against shading (one ray
     /// in 16 is timed, about 1% slower).
-    #[arg(long = "stats", conflicts_with = "quiet")]
+    #[arg(long = "stats")]
     pub time_traces: bool,
     /// A flag that stops the render after its current batch (set by a signal handler).
     #[arg(skip)]
@@ -155,6 +155,8 @@ pub fn default_output(scene_path: &Path) -> PathBuf {
 impl RenderRequest {
     /// Check the outputs, load the scene and resolve the settings.
     pub fn prepare(&self) -> Result<PreparedRender> {
+        // contradictory flags first, before any file is read
+        self.strategy.resolve().map_err(Error::Settings)?;
         let output = self
             .output
             .clone()

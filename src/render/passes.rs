@@ -10,8 +10,9 @@
 
 use super::*;
 
-/// One uniform pass: the samples `bounds` (relative to the render's first sample) of pass `k`,
-/// which is the set of replicate `rep` whose first sample index is `origin`.
+/// One uniform pass: the samples `bounds` (relative to the render's first sample) of the set
+/// of replicate `rep` whose first sample index is `origin`; of fixed passes, pass number `k`
+/// (passes that follow the clock have one replicate, and `k` 0).
 struct UniformPass {
     bounds: Range<u64>,
     k: u64,

@@ -64,12 +64,15 @@ pub(super) struct BatchOutput {
     pub(super) total: DVec3,
 }
 
-/// What the tile kernel renders with: the scene seen by the camera, with `settings` and the
-/// samplers `factory` makes with seed `seed`, the guide, and a progress to advance.
+/// What the tile kernel renders with: the scene seen by the camera at `width × height`, what the
+/// integrator is told, the samplers `factory` makes with seed `seed`, the guide, and a progress
+/// to advance. It keeps only these of the render's settings, so a job that changes the others
+/// (the spp, the first sample, the replicates) cannot leave it reading stale ones.
 pub(super) struct Kernel<'a, F: SamplerFactory> {
     scene: &'a Scene,
     camera: &'a Camera,
-    settings: &'a RenderSettings,
+    width: u32,
+    height: u32,
     integrator: IntegratorSettings,
     factory: &'a F,
     guide: Guiding<'a>,
@@ -92,7 +95,7 @@ impl<'a, F: SamplerFactory> Kernel<'a, F> {
     pub(super) fn new(
         scene: &'a Scene,
         camera: &'a Camera,
-        settings: &'a RenderSettings,
+        settings: &RenderSettings,
         factory: &'a F,
         guide: Guiding<'a>,
         progress: &'a dyn Progress,
@@ -100,7 +103,8 @@ impl<'a, F: SamplerFactory> Kernel<'a, F> {
         Kernel {
             scene,
             camera,
-            settings,
+            width: settings.width,
+            height: settings.height,
             integrator: settings.integrator(),
             factory,
             guide,
@@ -141,7 +145,7 @@ impl<'a, F: SamplerFactory> Kernel<'a, F> {
     /// Tile `t` of `batch`, its pixels in row order, each from its sums in `sums` (if any).
     fn tile(&self, t: u32, batch: &Batch, sums: Option<&Film>, sampler: &mut F::Sampler) -> Tile {
         let tile_start = Instant::now();
-        let (width, height) = (self.settings.width, self.settings.height);
+        let (width, height) = (self.width, self.height);
         let tiles_x = width.div_ceil(TILE);
         let origin = UVec2::new((t % tiles_x) * TILE, (t / tiles_x) * TILE);
         let size = UVec2::new(TILE.min(width - origin.x), TILE.min(height - origin.y));
