@@ -213,14 +213,11 @@ impl RenderRequest {
                 )));
             }
         }
-        let outputs: Vec<NamedPath> = [
-            ("-o", Some(output)),
-            ("--variance", self.variance.as_deref()),
-            ("--spp-map", self.error.spp_map.as_deref()),
-        ]
-        .into_iter()
-        .filter_map(|(f, p)| p.map(|p| (f, p)))
-        .collect();
+        let mut outputs: Vec<NamedPath> = vec![("-o", output)];
+        outputs.extend(super::given(&[
+            ("--variance", &self.variance),
+            ("--spp-map", &self.error.spp_map),
+        ]));
         let toml = self.scene.join("scene.toml");
         let mut inputs = vec![("SCENE", self.scene.as_path())];
         if self.scene.is_dir() {
