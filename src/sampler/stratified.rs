@@ -31,6 +31,15 @@
 //! Each pass of N samples (sample indices `pN .. (p+1)N`) is a
 //! complete, independent stratified set, so runs of several passes stay unbiased and
 //! stratified pass by pass.
+//!
+//! **Which set a sample belongs to.** A set is keyed by its size N and its first sample index
+//! `s`: a set whose `s` is a multiple of N by `(N, s/N)` (the pass number), any other by
+//! `(N, s/N, s)`. So two sets share points only when they are the same set (same N, same
+//! first index), and two different sample indices never draw the same points, whatever ranges
+//! of which sets two renders took: a render cut inside its set (Ctrl-C, a time limit) and a
+//! resume from the next index with the same N (`--first-sample`) are independent, and `vrpt
+//! merge` of the two counts no sample twice. (Keyed by `⌊s/N⌋` alone, a set starting at 5
+//! was the set starting at 0 again, one slot on.)
 
 use super::strata::{grid_shape, mask_of, permute_with, FastDiv};
 use super::{Sampler, ONE_MINUS_EPSILON};
@@ -158,9 +167,11 @@ pub struct StratifiedSampler {
     /// Index of the current sample within its pass.
     j: u32,
     dim: u32,
-    /// Index of the first sample of the first pass, and that pass's number (`origin / N`).
+    /// Index of the first sample of the first pass, that pass's number (`origin / N`), and
+    /// whether `origin` is a multiple of N (then every set's first index is).
     origin: u32,
     pass_base: u32,
+    aligned: bool,
     /// Whether this N uses tables, their tags per dimension, the tables (N entries per
     /// dimension: a stratum in 1D, `x | y << 16` stratum indices in 2D), and room for σ, τ.
     tables: bool,
@@ -178,9 +189,10 @@ impl StratifiedSampler {
     }
 
     /// A sampler whose passes of `samples_per_pass` start at sample `origin`: sample `i` is
-    /// number `(i − origin) mod N` of pass `(i − origin) / N + ⌊origin / N⌋`, so an origin that
-    /// is a multiple of N gives the passes of [`StratifiedSampler::new`], and a shorter last
-    /// pass of a render (spp not a multiple of the pass size) is one whole set of its own size.
+    /// number `(i − origin) mod N` of the set that starts at `origin + ⌊(i − origin)/N⌋·N`, so
+    /// an origin that is a multiple of N gives the passes of [`StratifiedSampler::new`], and a
+    /// shorter last pass of a render (spp not a multiple of the pass size) is one whole set of
+    /// its own size. Sets that start at different indices are independent (the module doc).
     /// Indices below `origin` are not valid.
     pub fn with_origin(seed: u64, samples_per_pass: u32, origin: u32) -> Self {
         let n = samples_per_pass.max(1);
@@ -213,6 +225,7 @@ impl StratifiedSampler {
             dim: 0,
             origin,
             pass_base: origin / n,
+            aligned: origin.is_multiple_of(n),
             tables: (2..=TABLE_MAX_N).contains(&n),
             tags,
             table,
@@ -326,11 +339,14 @@ impl Sampler for StratifiedSampler {
         let pass = p + self.pass_base;
         if (pixel, pass) != (self.pixel, self.pass) {
             (self.pixel, self.pass) = (pixel, pass);
-            self.key = hash_words(&[
+            let words = [
                 self.seed ^ 0x5354_5241_5449_4649, // "STRATIFI": other streams than independent
                 ((pixel.x as u64) << 32) | pixel.y as u64,
                 ((self.n as u64) << 32) | pass as u64,
-            ]);
+                // a set off the grid of multiples of N: its first index too (module doc)
+                self.origin as u64 + p as u64 * self.n as u64,
+            ];
+            self.key = hash_words(if self.aligned { &words[..3] } else { &words });
             // a new generation makes every table stale (tags hold 2·generation + kind in a
             // u64, so a wrapped u32 generation cannot look current: it restarts at 1 below)
             self.generation = self.generation.wrapping_add(1);
@@ -491,6 +507,48 @@ mod tests {
                         );
                     }
                 }
+            }
+        }
+    }
+
+    /// A set that starts off the grid of multiples of N (a resume after a render cut inside
+    /// its set) shares no point with the set of the same N that starts on the grid before it:
+    /// keyed by `⌊origin/N⌋` alone it was that set again, one slot on (issue 46). Sets that start
+    /// on the grid keep their points (images without the defect do not change).
+    #[test]
+    fn sets_that_start_at_different_indices_share_no_point() {
+        let points = |n: u32, origin: u32, dim: u32| -> Vec<(u32, u32)> {
+            let mut s = StratifiedSampler::with_origin(11, n, origin);
+            (origin..origin + n)
+                .map(|i| {
+                    s.start_pixel_sample(UVec2::new(2, 5), i);
+                    s.skip_2d(dim);
+                    let p = s.next_2d();
+                    (p.x.to_bits(), p.y.to_bits())
+                })
+                .collect()
+        };
+        for n in [2u32, 7, 16, 37, 64, TABLE_MAX_N + 3] {
+            for dim in [0, TABLE_DIMS + 1] {
+                let first = points(n, 0, dim);
+                for origin in [1, n / 2, n - 1, n + 1, 3 * n + 2] {
+                    let shifted = points(n, origin, dim);
+                    assert!(
+                        shifted.iter().all(|p| !first.contains(p)),
+                        "n={n} origin={origin} dim={dim}: a point of the set at 0 again"
+                    );
+                }
+                // on the grid: the set starting at 2N is pass 2 of the sampler from 0
+                let mut from0 = StratifiedSampler::new(11, n);
+                let pass2: Vec<(u32, u32)> = (2 * n..3 * n)
+                    .map(|i| {
+                        from0.start_pixel_sample(UVec2::new(2, 5), i);
+                        from0.skip_2d(dim);
+                        let p = from0.next_2d();
+                        (p.x.to_bits(), p.y.to_bits())
+                    })
+                    .collect();
+                assert_eq!(points(n, 2 * n, dim), pass2, "n={n} dim={dim}");
             }
         }
     }

@@ -6,6 +6,7 @@
 use crate::common;
 use common::{ok, vrpt};
 
+use glam::Vec3;
 use std::path::Path;
 use std::process::{Command, Output, Stdio};
 use std::sync::atomic::AtomicBool;
@@ -200,6 +201,100 @@ fn batches_do_not_change_a_pixel() {
         let one = render_passes(&scene, &settings, &first, &NoProgress).unwrap();
         assert_eq!(r.film.mean_image(), one.film.mean_image(), "{sampler}");
     }
+}
+
+/// A render cut inside its stratified set keeps the set's first samples; a resume from the
+/// next sample index with the same set size is a set of its own, whose points are new, so
+/// `merge` of the two counts no sample twice (issue 46: sets were keyed by ⌊first/N⌋, so the
+/// resume's first sample drew the cut render's first sample's points again, in every pixel).
+/// Pixels that see only the light give equal values from different points: a quarter of the
+/// pixels that see anything is far more than the 20×12 Cornell box has of them (before the fix:
+/// every one was equal).
+#[test]
+fn a_resume_after_a_cut_render_draws_new_points_and_merges() {
+    static ALWAYS: AtomicBool = AtomicBool::new(true);
+    let scene = common::shipped("cornell-box");
+    let settings = RenderSettings {
+        width: 20,
+        height: 12,
+        spp: 37,
+        seed: common::seed(3),
+        ..RenderSettings::default()
+    };
+    let cut_plan = PassPlan {
+        stop: Some(&ALWAYS),
+        ..PassPlan::default()
+    };
+    let cut = render_passes(&scene, &settings, &cut_plan, &NoProgress).unwrap();
+    assert_eq!((cut.spp, cut.first_sample, cut.interrupted), (1, 0, true));
+    // the resume's first sample: index 1, the first of its set of 37
+    let resume = RenderSettings {
+        first_sample: 1,
+        ..settings.clone()
+    };
+    let first = PassPlan {
+        shard: Some((0, 37)),
+        ..PassPlan::default()
+    };
+    let r = render_passes(&scene, &resume, &first, &NoProgress).unwrap();
+    assert_eq!((r.spp, r.first_sample), (1, 1));
+    let (a, b) = (cut.film.mean_image(), r.film.mean_image());
+    let lit: Vec<_> = a
+        .iter()
+        .zip(&b)
+        .filter(|(x, y)| **x != Vec3::ZERO || **y != Vec3::ZERO)
+        .collect();
+    let same = lit.iter().filter(|(x, y)| x == y).count();
+    assert!(
+        lit.len() > 50 && same < lit.len() / 4,
+        "{same} of {} lit pixels drew the cut render's sample again",
+        lit.len()
+    );
+    // the two files merge as disjoint ranges, 0..1 and 1..38
+    let dir = tempfile::tempdir().unwrap();
+    let cut_exr = dir.path().join("cut.exr");
+    let meta = vrpt::output::RenderMetadata {
+        interrupted: true,
+        requested_spp: Some(37),
+        ..RenderMetadata::new(
+            &scene,
+            &RenderSettings {
+                spp: 1,
+                ..settings.clone()
+            },
+            &cut.stats,
+        )
+    };
+    vrpt::output::write_render(&cut_exr, (&cut.film, None), &meta, 0.0, None).unwrap();
+    let rest = dir.path().join("rest.exr");
+    let seed = settings.seed.to_string();
+    ok(vrpt(&[
+        "render",
+        common::cornell_path().to_str().unwrap(),
+        "--width",
+        "20",
+        "--height",
+        "12",
+        "--spp",
+        "37",
+        "--first-sample",
+        "1",
+        "--seed",
+        &seed,
+        "-q",
+        "-o",
+        rest.to_str().unwrap(),
+    ]));
+    let merged = dir.path().join("merged.exr");
+    ok(vrpt(&[
+        "merge",
+        cut_exr.to_str().unwrap(),
+        rest.to_str().unwrap(),
+        "-o",
+        merged.to_str().unwrap(),
+    ]));
+    let m = read_exr(&merged).unwrap();
+    assert!(m.samples.unwrap().iter().all(|&n| n == 38));
 }
 
 /// Start a long render in the background, wait until it has rendered for a while, and send it
