@@ -221,9 +221,12 @@ impl DTree {
     }
 
     /// Add `value` spread by a box filter over directions (Müller et al.'s code): over the
-    /// square of the leaf's own size centred on `p` (clipped to `[0,1)²`), each leaf quadrant it
-    /// overlaps getting `value × overlap / box area`, so neighbouring quadrants learn alike and a
-    /// direction next to a recorded one is not left at zero.
+    /// square of the leaf's own size centred on `p`, each leaf quadrant it overlaps getting
+    /// `value × overlap / box area`, so neighbouring quadrants learn alike and a direction next
+    /// to a recorded one is not left at zero. The box keeps all of `value`: `v = φ/2π` wraps, so
+    /// the part of the box past `v = 0` or 1 lands on the other side, and `u = (cosθ + 1)/2`
+    /// ends at the poles, so a box past `u = 0` or 1 spreads `value` over its part inside
+    /// (Müller et al. clip both, losing up to half a record next to `φ = 0` or a pole).
     pub(super) fn record_box(&mut self, p: Vec2, value: f32) {
         // the depth of the leaf at p
         let (mut n, mut q, mut size) = (0usize, p, 1.0f32);
@@ -236,8 +239,33 @@ impl DTree {
             }
         }
         let lo = p - Vec2::splat(0.5 * size);
-        let density = value / (size * size);
-        self.splat(0, Vec2::ZERO, 1.0, (lo, lo + Vec2::splat(size)), density);
+        let hi = lo + Vec2::splat(size);
+        let (u0, u1) = (lo.x.max(0.0), hi.x.min(1.0));
+        let width = if (u0, u1) == (lo.x, hi.x) {
+            size
+        } else {
+            u1 - u0
+        };
+        let density = value / (width * size);
+        self.splat(
+            0,
+            Vec2::ZERO,
+            1.0,
+            (Vec2::new(u0, lo.y), Vec2::new(u1, hi.y)),
+            density,
+        );
+        for shift in [-1.0f32, 1.0] {
+            let (a, b) = (lo.y + shift, hi.y + shift);
+            if b > 0.0 && a < 1.0 {
+                self.splat(
+                    0,
+                    Vec2::ZERO,
+                    1.0,
+                    (Vec2::new(u0, a), Vec2::new(u1, b)),
+                    density,
+                );
+            }
+        }
     }
 
     /// Add `density ×` the overlap of box `(lo, hi)` with each leaf quadrant below node `n`
@@ -329,6 +357,38 @@ mod tests {
         assert!(r.node_count() > 4, "{}", r.node_count());
         assert!(r.depth() >= 4);
         assert_eq!(r.total(), 0.0);
+    }
+
+    /// A record's box keeps all its value next to `φ = 0` (v wraps) and next to a pole (u
+    /// ends): clipped, as before issue 46, a record at a corner kept a quarter of it.
+    #[test]
+    fn a_box_record_keeps_its_value_at_the_edges() {
+        let t = learned();
+        for p in [
+            Vec2::new(0.5, 0.0001),
+            Vec2::new(0.5, 0.9999),
+            Vec2::new(0.0001, 0.5),
+            Vec2::new(0.9999, 0.0001),
+            Vec2::new(0.1, 0.8),
+            Vec2::new(0.10005, 0.80005),
+        ] {
+            let mut r = t.refined(ENERGY_FRACTION);
+            r.record_box(p, 2.0);
+            r.build();
+            assert!((r.total() - 2.0).abs() < 1e-5, "{p}: {}", r.total());
+        }
+        // wrapped: a record at v = 0⁺ gives its neighbour across v = 1 as much as the one it lies in
+        let mut r = DTree::default();
+        r.record_box(Vec2::new(0.6, 0.0), 1.0);
+        r.build();
+        let (below, above) = (
+            r.pdf_canonical(Vec2::new(0.6, 0.99)),
+            r.pdf_canonical(Vec2::new(0.6, 0.01)),
+        );
+        assert!(
+            below > 0.0 && (below - above).abs() < 1e-6,
+            "{below} {above}"
+        );
     }
 
     /// A tree refined where energy was recorded (several levels deep in one corner).

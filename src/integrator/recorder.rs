@@ -110,22 +110,26 @@ impl PathRecorder for Training<'_> {
     fn finish(&mut self, l: Vec3) {
         for v in &self.pending[..self.n] {
             // L_i ≈ ΔL / β per channel (where β carries anything), averaged over the channels
+            // (divided by the channels that carry something: by 3 always, a bounce after a
+            // saturated colour learned ⅓ or ⅔ of its radiance)
             let d = l - v.l_start;
-            let (mut li, mut product) = (0.0, 0.0);
+            let (mut li, mut product, mut channels) = (0.0, 0.0, 0.0f32);
             for c in 0..3 {
                 if v.beta[c] > 1e-12 {
                     let lc = d[c] / v.beta[c];
                     li += lc;
                     product += lc * v.f_cos[c];
+                    channels += 1.0;
                 }
             }
-            let value = li / (3.0 * v.pdf);
+            let channels = channels.max(1.0); // none: a record of 0, as before
+            let value = li / (channels * v.pdf);
             if value.is_finite() && value >= 0.0 {
                 self.out.push(Record {
                     leaf: v.leaf,
                     point: v.point,
                     value,
-                    product: product / 3.0,
+                    product: product / channels,
                     pdf: v.pdf,
                     p_bsdf: v.p_bsdf,
                     p_guide: v.p_guide,
@@ -133,5 +137,43 @@ impl PathRecorder for Training<'_> {
             }
         }
         self.n = 0;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A record is `ΔL/β` averaged over the channels β carries: after a bounce off a pure red
+    /// surface (β = (0.5, 0, 0)) that brought back red light 1, the radiance that arrived is 2,
+    /// and the record 2/p, not ⅓ of it (issue 46: the sum was divided by 3 whatever the count).
+    #[test]
+    fn a_record_averages_over_the_channels_that_carry_light() {
+        let mut out = Vec::new();
+        let mut t = Training::new(&mut out);
+        for (k, beta) in [
+            Vec3::new(0.5, 0.0, 0.0),
+            Vec3::new(0.5, 0.5, 0.0),
+            Vec3::splat(0.5),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            t.pending[k] = Pending {
+                beta,
+                f_cos: Vec3::splat(0.25),
+                pdf: 4.0,
+                ..Pending::default()
+            };
+        }
+        t.n = 3;
+        t.finish(Vec3::new(1.0, 1.0, 0.0));
+        // red only: 2/4; red and green: (2 + 2)/2/4; all three: (2 + 2 + 0)/3/4
+        let want = [0.5, 0.5, 1.0 / 3.0];
+        for (r, w) in out.iter().zip(want) {
+            assert!((r.value - w).abs() < 1e-6, "{} against {w}", r.value);
+            assert!((r.product - 4.0 * w * 0.25).abs() < 1e-6);
+        }
+        assert_eq!(out.len(), 3);
     }
 }
