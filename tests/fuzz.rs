@@ -118,6 +118,11 @@ const TOKENS: &[&str] = &[
     "height",
     "spp",
     "max_depth",
+    "passes",
+    "pass_spp",
+    "replicates",
+    "16,32",
+    "16,,0",
     "[camera]",
     "[render]",
     "é",
@@ -294,7 +299,16 @@ fn readers_survive_mutated_inputs() {
             spp: 2,
             ..Default::default()
         };
-        let img = common::as_image(&scene, &s);
+        // its metadata with the keys that hold lists and counts (the passes a render recorded,
+        // issue 46), so mutations reach their readers
+        let (film, stats) = common::render_quiet(&scene, &s);
+        let meta = vrpt::output::RenderMetadata {
+            pass_spp: Some(1),
+            passes: vec![1, 1],
+            shard: Some((0, 1)),
+            ..vrpt::output::RenderMetadata::new(&scene, &s, &stats)
+        };
+        let img = vrpt::output::render_image(&film, &meta);
         vrpt::image_io::write_exr(&exr_path, &img).unwrap();
     }
     let exr = std::fs::read(&exr_path).unwrap();

@@ -283,6 +283,7 @@ fn merged_metadata(inputs: &[MergeInput], merged: &MergedPixels) -> RenderMetada
         render_seconds: inputs.iter().map(|i| i.meta.render_seconds).sum(),
         nonfinite_samples: inputs.iter().map(|i| i.meta.nonfinite_samples).sum(),
         pass_spp: None,
+        passes: Vec::new(),
         time_limit_seconds: None,
         image: None,
         shard: None,

@@ -181,6 +181,8 @@ fn prepare_common(
     }
     a.entries()?;
     let scene = scene::load(&a.scene)?;
+    // and the files the scene was read from (its textures, MTLs, scene.toml)
+    super::check_against_scene(&outputs, &scene)?;
     let reference = read_exr(&a.reference)?;
     let s = ExperimentSettings::for_reference(
         &scene,

@@ -196,11 +196,7 @@ fn check_request(req: &GuideRequest) -> Result<()> {
 /// lies outside the image.
 fn load_scene(req: &GuideRequest) -> Result<(Scene, RenderSettings)> {
     let scene = scene::load(&req.scene)?;
-    let read: Vec<crate::image_io::NamedPath> = std::iter::once(scene.source.as_path())
-        .chain(scene.files.iter().map(|p| p.as_path()))
-        .map(|p| ("the scene's file", p))
-        .collect();
-    crate::image_io::check_outputs(&[("-o", &req.output)], &read)?;
+    super::check_against_scene(&[("-o", &req.output)], &scene)?;
     let settings = RenderSettings {
         seed: req.seed,
         strategy: req.strategy()?,

@@ -107,6 +107,16 @@ pub(crate) fn given<'a>(
         .collect()
 }
 
+/// Refuse outputs that would write over a file `scene` was read from (its OBJ, scene.toml,
+/// MTLs, textures, environment map): the one check of every command that loads a scene, once
+/// it is loaded (the files a scene names are known only then).
+pub(crate) fn check_against_scene(
+    outputs: &[crate::image_io::NamedPath],
+    scene: &Scene,
+) -> Result<()> {
+    crate::image_io::check_outputs(outputs, &scene.read_from())
+}
+
 /// Check, before any work, the outputs of a command that draws a picture (`-o`) and writes
 /// numbers (`--json`): distinct paths, writable, and the picture a `.png` (or `.svg` where the
 /// command draws vectors), each refusal one line.

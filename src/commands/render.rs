@@ -130,6 +130,8 @@ pub struct RenderOutcome {
     pub requested_spp: u32,
     /// Whether the stop flag ended it before all its samples.
     pub interrupted: bool,
+    /// The replicates asked for, where fewer rendered (`settings.replicates` says how many).
+    pub missing_replicates: Option<u32>,
     /// The scene, the speed and the rays, in three lines ([`RenderStats::summary`]).
     pub summary: String,
     /// Where the time went ([`RenderStats::timing`]).
@@ -165,12 +167,8 @@ impl RenderRequest {
         let start = Instant::now();
         let scene = scene::load(&self.scene)?;
         let load_time = start.elapsed();
-        // and the files the scene was read from: its OBJ, environment map and textures
-        let read: Vec<NamedPath> = std::iter::once(scene.source.as_path())
-            .chain(scene.files.iter().map(PathBuf::as_path))
-            .map(|p| ("the scene's file", p))
-            .collect();
-        check_outputs(&outputs, &read)?;
+        // and the files the scene was read from
+        super::check_against_scene(&outputs, &scene)?;
         let settings = self.settings(&scene)?;
         let plan = self.plan(&settings)?;
         let samples = match self.shard {
@@ -277,6 +275,13 @@ impl RenderOutcome {
                 self.stats.nonfinite
             ));
         }
+        if let Some(asked) = self.missing_replicates {
+            w.push(format!(
+                "only {} of the {asked} replicates rendered (the spp or the time ran out after \
+                 {} spp): the metadata records {}",
+                self.settings.replicates, self.settings.spp, self.settings.replicates
+            ));
+        }
         if self.interrupted {
             w.push(format!(
                 "interrupted: wrote {} with the {} of {} spp taken (its metadata says so)",
@@ -299,22 +304,20 @@ impl PreparedRender {
     pub fn run(self, progress: &dyn Progress) -> Result<RenderOutcome> {
         let r = render_passes(&self.scene, &self.settings, &self.plan, progress)?;
         let requested = self.samples.len() as u32;
-        // the sets of points the image holds: one where an adaptive render finished uniformly
-        // (its first round's few samples of R sets merged into one set's passes)
-        let sets = match r.finished_uniformly {
-            Some(_) => 1,
-            None => self.settings.replicates,
-        };
+        let asked_replicates = self.settings.replicates;
         let settings = RenderSettings {
             spp: r.spp,
             first_sample: r.first_sample,
+            replicates: r.replicates,
             ..self.settings
         };
         let meta = RenderMetadata {
-            estimate: Some(EstimateRecord::new(sets, &r.estimate)),
+            // the sets of points that rendered (not those asked for)
+            estimate: Some(EstimateRecord::new(r.replicates, &r.estimate)),
             adaptive_rounds: r.rounds,
             target_error: self.plan.target_error,
             pass_spp: self.plan.pass_spp,
+            passes: passes_record(&r.passes, self.plan.pass_spp),
             time_limit_seconds: self.time_limit,
             shard: self.shard,
             requested_spp: (r.spp < requested).then_some(requested as u64),
@@ -341,7 +344,26 @@ impl PreparedRender {
             stats: r.stats,
             requested_spp: requested,
             interrupted: r.interrupted,
+            missing_replicates: (r.finished_uniformly.is_none() && r.replicates < asked_replicates)
+                .then_some(asked_replicates),
         })
+    }
+}
+
+/// The pass sizes a render records: all of them, where any but the last differs from the
+/// first (passes that grew, or a rest split off a sliver) or from the pass size asked for;
+/// none where they were the plain passes of `pass_spp` (a shorter last one included).
+fn passes_record(passes: &[u32], pass_spp: Option<u32>) -> Vec<u32> {
+    let plain = match passes.split_last() {
+        None => true,
+        Some((_, rest)) => rest
+            .iter()
+            .all(|&p| Some(p) == pass_spp.or(passes.first().copied())),
+    };
+    if plain {
+        Vec::new()
+    } else {
+        passes.to_vec()
     }
 }
 

@@ -30,8 +30,10 @@ pub const ALLOCATE_ABOVE: f64 = 1.2;
 /// The samples per pixel (per replicate) of an adaptive round of `budget` spp on average:
 /// `budget·(UNIFORM_SHARE + (1 − UNIFORM_SHARE)·e_i/ē)`, at least 1 and at most `MAX_SHARE·budget`,
 /// with `e_i` the 3×3 box average of each pixel's relative error per sample,
-/// `√(mean_c v_c·n/(r_c² + 0.01))` (`v` the estimated variance of the mean over `n` samples,
-/// `r²` from [`squared_reference`]):
+/// `√(mean_c v_c·n/(r_c² + 0.01))` (`v` the estimated variance of the mean, `n` its effective
+/// sample count: for rounds weighted by their planned sizes `b_j`, `n = B²/Σ_j b_j²/n_j`, the
+/// count whose plain mean would have variance `v`, not `Σ_j n_j`; `r²` from
+/// [`squared_reference`]):
 /// the allocation that minimises the relMSE, `n_i ∝ σ_i/√(r_i² + 0.01)`, from the error left in
 /// each pixel. `v`, `n` and `F` come from the rounds before (never from the round they allocate).
 pub fn allocate(
@@ -39,7 +41,7 @@ pub fn allocate(
     height: u32,
     mean: &[Vec3],
     variance: &[Vec3],
-    counts: &[u64],
+    samples: &[f64],
     budget: u32,
 ) -> Vec<u32> {
     let (w, h) = (width as usize, height as usize);
@@ -48,7 +50,7 @@ pub fn allocate(
         .map(|i| {
             let mut s = 0.0;
             for c in 0..3 {
-                s += variance[i][c] as f64 * counts[i] as f64 / (r2[i][c] + REL_EPSILON);
+                s += variance[i][c] as f64 * samples[i] / (r2[i][c] + REL_EPSILON);
             }
             (s / 3.0).sqrt()
         })
@@ -322,10 +324,13 @@ mod tests {
         // 4×1 image: one noisy pixel, three noiseless ones
         let mean = vec![Vec3::ONE; 4];
         let var = vec![Vec3::splat(1.0), Vec3::ZERO, Vec3::ZERO, Vec3::ZERO];
-        let n = allocate(4, 1, &mean, &var, &[16; 4], 8);
+        let n = allocate(4, 1, &mean, &var, &[16.0; 4], 8);
         assert!(n.iter().all(|&k| k >= 2), "{n:?}"); // the floor: 0.25·8
         assert!(n[0] > n[1] && n[1] > n[3], "{n:?}"); // the box filter spreads to neighbours
                                                       // no information: uniform
-        assert_eq!(allocate(4, 1, &mean, &[Vec3::ZERO; 4], &[16; 4], 8), [8; 4]);
+        assert_eq!(
+            allocate(4, 1, &mean, &[Vec3::ZERO; 4], &[16.0; 4], 8),
+            [8; 4]
+        );
     }
 }

@@ -230,6 +230,26 @@ pub const KEYS: &[Key] = &[
         },
     },
     Key {
+        name: "passes",
+        write: |m| {
+            let sizes: Vec<String> = m.passes.iter().map(u32::to_string).collect();
+            (!sizes.is_empty()).then(|| sizes.join(","))
+        },
+        read: |m, v| {
+            m.passes = match v.text {
+                None => Vec::new(),
+                Some(t) => t
+                    .split(',')
+                    .map(|s| v.number(s))
+                    .collect::<std::result::Result<_, _>>()?,
+            };
+            match m.passes.contains(&0) {
+                true => Err("metadata 'passes' holds a pass of 0 spp".into()),
+                false => Ok(()),
+            }
+        },
+    },
+    Key {
         name: "time_limit_seconds",
         write: |m| m.time_limit_seconds.map(|t| t.to_string()),
         read: |m, v| set(&mut m.time_limit_seconds, v.seconds()?),

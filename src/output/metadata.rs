@@ -42,8 +42,13 @@ pub struct RenderMetadata {
     pub render_seconds: f64,
     /// Samples dropped because their radiance was not finite.
     pub nonfinite_samples: u64,
-    /// Samples per pixel per pass, when rendered in passes.
+    /// Samples per pixel per pass, when rendered in passes (the first pass's, where passes
+    /// followed the clock).
     pub pass_spp: Option<u32>,
+    /// Every uniform pass's samples per pixel, in order, where they were not all `pass_spp`
+    /// (passes that grew under a time limit, or a rest kept from a sliver of a grid; key
+    /// `passes`, comma-separated); empty otherwise.
+    pub passes: Vec<u32>,
     /// The `--time-limit` the render ran under.
     pub time_limit_seconds: Option<f64>,
     /// The inputs of a merge.
@@ -169,6 +174,7 @@ impl RenderMetadata {
             render_seconds: stats.elapsed.as_secs_f64(),
             nonfinite_samples: stats.nonfinite,
             pass_spp: None,
+            passes: Vec::new(),
             time_limit_seconds: None,
             merged_from: None,
             image: None,
@@ -260,6 +266,7 @@ impl RenderMetadata {
             render_seconds: 0.0,
             nonfinite_samples: 0,
             pass_spp: None,
+            passes: Vec::new(),
             time_limit_seconds: None,
             merged_from: None,
             image: None,

@@ -91,6 +91,7 @@ mod tests {
             render_seconds: 1.5,
             nonfinite_samples: 2,
             pass_spp: Some(16),
+            passes: vec![16, 32, 20],
             time_limit_seconds: Some(0.5),
             merged_from: None,
             image: None,

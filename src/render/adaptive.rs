@@ -88,6 +88,13 @@ impl<F: SamplerFactory> Job<'_, F> {
                     return self.finish_uniformly(s.raw, next, pilot_spp, gain, stats);
                 }
             };
+            // a round that gives every pixel the same count plans that count: the first
+            // round's size kept from a sliver of a grid is its size (its planned size recorded
+            // the spp it did not render)
+            let size = match counts.first() {
+                Some(&c) if counts.iter().all(|&x| x == c) => c as u64,
+                _ => size,
+            };
             let round_start = Instant::now();
             let Some(round) = self.round(s.done, size, counts, &s.next, stats) else {
                 interrupted = true;
@@ -168,8 +175,9 @@ impl<F: SamplerFactory> Job<'_, F> {
             let gain = estimate::cross_validated_gain(w, &mean, &e.variance, &samples);
             let bar = self.plan.min_allocation_gain;
             if gain >= bar.unwrap_or(estimate::ALLOCATE_ABOVE) {
-                let n: Vec<u64> = (0..s.raw.len()).map(|i| s.raw.count(i)).collect();
-                estimate::allocate(w, h, &mean, &e.variance, &n, size as u32)
+                // the error per sample from the variance of the weighted mean and its
+                // effective count (Σ counts overstated it where counts left the plan)
+                estimate::allocate(w, h, &mean, &e.variance, &samples, size as u32)
             } else if s.done == 1 && self.plan.target_error.is_none() {
                 return Err(gain);
             } else {
@@ -257,8 +265,15 @@ impl<F: SamplerFactory> Job<'_, F> {
             spp: (self.settings.spp as u64 - pilot_spp).max(1) as u32,
             ..self.settings.clone()
         };
+        // the rest is a size the code derives: one set of it would be a sliver of a grid
+        // where it is prime or oblong (1037 − 64 = 973 = 7·139), so its first pass is kept
+        // from one and a set of what is left follows
+        let rest = settings.spp as u64;
         let plan = PassPlan {
             adaptive: false,
+            pass_spp: (self.plan.pass_spp).or(Some(
+                crate::sampler::stratifiable(rest).min(u32::MAX as u64) as u32,
+            )),
             ..*self.plan
         };
         let job = Job {
@@ -275,7 +290,11 @@ impl<F: SamplerFactory> Job<'_, F> {
             stats: RenderStats::default(),
             first_sample: self.settings.first_sample,
             spp: (pilot_spp + rest.spp as u64).min(u32::MAX as u64) as u32,
+            passes: std::iter::once(pilot_spp as u32)
+                .chain(rest.passes)
+                .collect(),
             interrupted: rest.interrupted,
+            replicates: 1,
             estimate,
             rounds: Some(1),
             uniform_rounds: 0,
@@ -330,7 +349,9 @@ impl Rounds {
             stats: RenderStats::default(),
             first_sample: settings.first_sample,
             spp: (self.planned * r64).min(u32::MAX as u64) as u32,
+            passes: Vec::new(),
             interrupted,
+            replicates: settings.replicates,
             estimate,
             rounds: Some(self.done),
             uniform_rounds: self.uniform_rounds,
@@ -357,4 +378,36 @@ fn weighted(raw: &Film, replicates: &Replicates) -> Film {
         film.set_pixel_sums(i, replicates.mean(i) * n as f64, s2, n);
     }
     film
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+
+    /// The per-sample error `allocate` shares by is the variance of the weighted mean times the
+    /// count whose plain mean has that variance, `B²/Σ_j b_j²/n_j`: two pixels whose samples
+    /// have the same variance get the same share, whatever their counts were (issue 46: with
+    /// `Σ_j n_j` a pixel that took 16 then 128 samples of rounds planned 16 and 32 counted 144
+    /// samples, 1.5× its 96, and drew √1.5 × the share).
+    #[test]
+    fn allocation_reads_the_effective_count_of_weighted_rounds() {
+        let sigma2 = 0.3f32;
+        let mut spread = [0.0f64; 2];
+        for (b, counts) in [(16u64, [16u32, 16]), (32, [32, 128])] {
+            for (q, &c) in spread.iter_mut().zip(&counts) {
+                *q += (b * b) as f64 / c as f64;
+            }
+        }
+        let samples = effective_samples(&spread, 48);
+        assert_eq!(samples, vec![48.0, 96.0]);
+        // the weighted means' variances: σ²·Σ b_j²/n_j / B²
+        let variance: Vec<Vec3> = spread
+            .iter()
+            .map(|q| Vec3::splat(sigma2 * (*q / (48.0 * 48.0)) as f32))
+            .collect();
+        let mean = [Vec3::splat(0.5); 2];
+        let counts = estimate::allocate(2, 1, &mean, &variance, &samples, 64);
+        assert_eq!(counts[0], counts[1], "{counts:?}");
+    }
 }

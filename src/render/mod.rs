@@ -326,8 +326,16 @@ pub struct Rendered {
     pub first_sample: u32,
     /// Samples per pixel rendered.
     pub spp: u32,
+    /// Each uniform pass's samples per pixel, in order (an adaptive render that finished
+    /// uniformly: its first round's, then its passes'; empty for adaptive rounds).
+    pub passes: Vec<u32>,
     /// Whether the stop flag ended the render before all its samples.
     pub interrupted: bool,
+    /// The independent sets of points (replicates) that hold samples: fewer than
+    /// `settings.replicates` where the spp or the clock ran out before every replicate had a
+    /// pass (`--replicates 4 --pass-spp 64 --spp 64` renders one), 1 where an adaptive render
+    /// finished as uniform passes of one set.
+    pub replicates: u32,
     /// The image's estimated error.
     pub estimate: ErrorEstimate,
     /// The rounds of an adaptive render (`None`: every pixel took the same samples).

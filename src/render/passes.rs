@@ -58,6 +58,7 @@ impl<F: SamplerFactory> Job<'_, F> {
             && plan.target_error.is_none()
             && reps == 1;
         let (mut last_size, mut rate) = (0u64, None::<f64>);
+        let mut passes = Vec::new();
         while done < range.end {
             // every pass renders at least one sample per pixel (its end lies past `done`), so a
             // render stopped before its first batch still writes a sample per pixel
@@ -76,6 +77,7 @@ impl<F: SamplerFactory> Job<'_, F> {
                 last_size = out.samples;
             }
             done += out.samples;
+            passes.push(out.samples as u32);
             interrupted = self.stopped() && done < range.end;
             film.merge(&out.film).map_err(Error::Settings)?;
             replicates.add_samples(p.rep, &out.film);
@@ -98,7 +100,9 @@ impl<F: SamplerFactory> Job<'_, F> {
             stats: RenderStats::default(),
             first_sample: (first + range.start) as u32,
             spp: (done - range.start) as u32,
+            passes,
             interrupted,
+            replicates: replicates.filled().max(1),
             estimate,
             rounds: None,
             uniform_rounds: 0,
@@ -134,8 +138,10 @@ impl<F: SamplerFactory> Job<'_, F> {
                 let pixels = settings.width as f64 * settings.height as f64;
                 let left = t.saturating_sub(self.start.elapsed()).as_secs_f64();
                 let fit = (left / (rate * pixels).max(1e-12)) as u64;
-                // a size the clock picks, kept from a sliver of a grid
-                crate::sampler::stratifiable((2 * last_size).min(fit))
+                // a size the clock picks, cut to the spp left, kept from a sliver of a grid
+                // (cut after the rounding, --spp 997 left a last pass of 501 = 3·167)
+                let left = spp.saturating_sub(done).max(1);
+                crate::sampler::stratifiable((2 * last_size).min(fit).min(left))
             }
             _ => plan.pass_spp.map_or(spp, |p| p as u64).clamp(1, spp.max(1)),
         };

@@ -90,8 +90,9 @@ pub struct Scene {
     pub hash: u64,
     /// The materials' textures.
     pub textures: TextureSet,
-    /// The image files it was read from beyond the OBJ (`source`): the environment map and the
-    /// textures, so a command can refuse to write over them ([`load`] fills it).
+    /// The files it was read from beyond the OBJ (`source`): its scene.toml, material
+    /// libraries, environment map and textures, so a command can refuse to write over them
+    /// ([`load`] fills it; [`Scene::read_from`] lists them all).
     pub files: Vec<PathBuf>,
     /// Whether a material has an opacity map (rays then test cutouts during traversal).
     cutouts: bool,
@@ -172,6 +173,15 @@ impl Scene {
             textures: options.textures,
             files: Vec::new(),
         })
+    }
+
+    /// Every file the scene was read from, each named for an error message: the OBJ, then
+    /// [`Scene::files`] (for [`crate::image_io::check_outputs`]).
+    pub fn read_from(&self) -> Vec<crate::image_io::NamedPath<'_>> {
+        std::iter::once(self.source.as_path())
+            .chain(self.files.iter().map(PathBuf::as_path))
+            .map(|p| ("the scene's file", p))
+            .collect()
     }
 
     /// Number of triangles.
@@ -461,11 +471,13 @@ pub fn load(path: &Path) -> Result<Scene> {
             }
         }
     };
-    let (mesh, materials, textures, warnings) = obj::load_obj(&obj_path)?;
+    let obj = obj::load_obj(&obj_path)?;
     let desc_env_file: Option<PathBuf> = desc.as_ref().and_then(|(d, toml)| {
         let map = d.environment.as_ref()?.map.as_ref()?;
         Some(toml.parent().unwrap_or(Path::new(".")).join(map.get_ref()))
     });
+    let toml_file = desc.as_ref().map(|(_, toml)| toml.clone());
+    let textures = obj.textures;
     let options = match desc {
         Some((d, toml)) => SceneOptions {
             camera: d.camera.map(|c| CameraDesc {
@@ -483,10 +495,11 @@ pub fn load(path: &Path) -> Result<Scene> {
             ..SceneOptions::default()
         },
     };
-    let env_file = desc_env_file.clone();
-    let mut scene = Scene::build(obj_path, mesh, materials, options, warnings)?;
-    scene.files = env_file
+    let mut scene = Scene::build(obj_path, obj.mesh, obj.materials, options, obj.warnings)?;
+    scene.files = toml_file
         .into_iter()
+        .chain(obj.libraries)
+        .chain(desc_env_file)
         .chain(scene.textures.paths().map(Path::to_path_buf))
         .collect();
     Ok(scene)

@@ -21,8 +21,19 @@ use glam::{Vec2, Vec3};
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
+/// What an OBJ file gave: its triangles, materials and their textures, the material libraries
+/// it read, and what the user should hear about.
+pub struct ObjFile {
+    pub mesh: Mesh,
+    pub materials: Vec<Material>,
+    pub textures: TextureSet,
+    /// The MTL files read (those its `mtllib` statements name that exist).
+    pub libraries: Vec<PathBuf>,
+    pub warnings: Vec<String>,
+}
+
 /// Load `path` into a triangle soup, its materials, their textures and any warnings.
-pub fn load_obj(path: &Path) -> Result<(Mesh, Vec<Material>, TextureSet, Vec<String>)> {
+pub fn load_obj(path: &Path) -> Result<ObjFile> {
     let text = crate::error::read_text(path)?;
     let mut warnings = Vec::new();
     let options = tobj::LoadOptions {
@@ -35,7 +46,7 @@ pub fn load_obj(path: &Path) -> Result<(Mesh, Vec<Material>, TextureSet, Vec<Str
         message,
     };
     check_obj_text(&text).map_err(obj_error)?;
-    let map_lines = read_mtl_maps(path, &text, &mut warnings)?;
+    let (libraries, map_lines) = read_mtl_maps(path, &text, &mut warnings)?;
     let (models, materials) =
         tobj::load_obj(path, &options).map_err(|e| obj_error(e.to_string()))?;
     let mut mats = convert_materials(path, &text, materials, &mut warnings)?;
@@ -65,18 +76,28 @@ pub fn load_obj(path: &Path) -> Result<(Mesh, Vec<Material>, TextureSet, Vec<Str
         mats.push(Material::default_grey("default-grey"));
     }
     let textures = attach_maps(&mut mats, &map_lines)?;
-    Ok((Mesh { triangles }, mats, textures, warnings))
+    Ok(ObjFile {
+        mesh: Mesh { triangles },
+        materials: mats,
+        textures,
+        libraries,
+        warnings,
+    })
 }
 
-/// The texture statements of every MTL the OBJ `text` names (`mtllib`) that exists, each with
-/// its MTL's path; a warning per MTL that names the statements and options it ignores.
+/// The MTL files read, and each texture statement with its MTL's path.
+type MtlMaps = (Vec<PathBuf>, Vec<(PathBuf, MapLine)>);
+
+/// The MTLs the OBJ `text` names (`mtllib`) that exist, and the texture statements of each,
+/// with its MTL's path; a warning per MTL that names the statements and options it ignores.
 fn read_mtl_maps(
     path: &Path,
     text: &str,
     warnings: &mut Vec<String>,
-) -> Result<Vec<(PathBuf, MapLine)>> {
+) -> Result<MtlMaps> {
     let folder = path.parent().unwrap_or(Path::new("."));
     let mut map_lines: Vec<(PathBuf, MapLine)> = Vec::new();
+    let mut libraries = Vec::new();
     for name in text
         .lines()
         .filter_map(|l| l.trim().strip_prefix("mtllib "))
@@ -102,9 +123,10 @@ fn read_mtl_maps(
                 ));
             }
             map_lines.extend(maps.into_iter().map(|m| (p.clone(), m)));
+            libraries.push(p);
         }
     }
-    Ok(map_lines)
+    Ok((libraries, map_lines))
 }
 
 /// vrpt's materials from tobj's reading of the MTL: none (with a warning) where the MTL file is

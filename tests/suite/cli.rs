@@ -2,9 +2,9 @@
 //! line with a non-zero exit (never a panic) for each kind of bad input.
 
 use crate::common;
-use common::{assert_one_line_error, vrpt};
+use common::{assert_one_line_error, ok, vrpt};
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 #[test]
 fn renders_the_cornell_box_to_png_and_exr() {
@@ -297,6 +297,58 @@ fn time_limited_render_stops_at_a_whole_pass() {
     assert_eq!(m.pass_spp, Some(4));
     assert_eq!(m.time_limit_seconds, Some(0.3));
     assert!(m.render_seconds >= 0.3, "{}", m.render_seconds);
+    // every pass is recorded (issue 46: only the first was), and they add up to the spp
+    assert_eq!(m.passes.first(), Some(&4));
+    assert_eq!(m.passes.iter().map(|&p| p as u64).sum::<u64>(), m.spp);
+}
+
+/// A growing render that reaches its `--spp` keeps every pass off a sliver of a grid, the one
+/// the spp cuts included (issue 46: `--spp 997 --time-limit 60` ended in a pass of 501 =
+/// 3·167), and records its passes; a render whose replicates did not all render records and
+/// says how many did.
+#[test]
+fn growing_passes_and_replicates_are_recorded_as_rendered() {
+    let dir = tempfile::tempdir().unwrap();
+    let exr = dir.path().join("g.exr");
+    let scene = common::cornell_path();
+    let (s, e) = (scene.to_str().unwrap(), exr.to_str().unwrap());
+    let small = ["--width", "4", "--height", "4", "-o", e];
+    let mut args = vec!["render", s, "--spp", "997", "--time-limit", "60", "-q"];
+    args.extend(small);
+    ok(vrpt(&args));
+    let img = vrpt::image_io::read_exr(&exr).unwrap();
+    let m = vrpt::output::RenderMetadata::from_attributes(&img.metadata).unwrap();
+    assert_eq!(m.spp, 997);
+    assert_eq!(m.passes.iter().sum::<u32>(), 997, "{:?}", m.passes);
+    let (_, body) = m.passes.split_last().unwrap();
+    for &p in body {
+        assert_eq!(
+            vrpt::sampler::stratifiable(p as u64),
+            p as u64,
+            "{:?}",
+            m.passes
+        );
+    }
+    let mut args = vec![
+        "render",
+        s,
+        "--spp",
+        "64",
+        "--pass-spp",
+        "64",
+        "--replicates",
+        "4",
+    ];
+    args.extend(small);
+    let out = ok(vrpt(&args));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("only 1 of the 4 replicates rendered"),
+        "{stderr}"
+    );
+    let img = vrpt::image_io::read_exr(&exr).unwrap();
+    let m = vrpt::output::RenderMetadata::from_attributes(&img.metadata).unwrap();
+    assert_eq!(m.estimate.unwrap().replicates, 1);
 }
 
 /// `--adaptive --time-limit`: rounds follow the clock, doubling while the time left allows, so
@@ -744,6 +796,74 @@ fn outputs_never_overwrite_inputs_or_each_other() {
         );
     }
     assert_eq!(std::fs::read(&texture).unwrap(), texture_bytes);
+}
+
+/// Third review (issue 46): no output of any command that loads a scene writes over a file the
+/// scene was read from: its OBJ, scene.toml, MTL and textures. `compare --grid` overwrote a
+/// texture and `--csv` replaced scene.toml, since the experiments checked only the scene's
+/// path. Each is refused in one line before any work, and every file of the scene keeps its
+/// bytes.
+#[test]
+fn no_command_writes_over_a_file_of_its_scene() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("textured");
+    std::fs::create_dir(&scene).unwrap();
+    for f in std::fs::read_dir(common::shipped_path("textured")).unwrap() {
+        let f = f.unwrap().path();
+        std::fs::copy(&f, scene.join(f.file_name().unwrap())).unwrap();
+    }
+    let files: Vec<(PathBuf, Vec<u8>)> = std::fs::read_dir(&scene)
+        .unwrap()
+        .map(|f| f.unwrap().path())
+        .map(|f| (f.clone(), std::fs::read(&f).unwrap()))
+        .collect();
+    let s = scene.to_str().unwrap();
+    let reference = dir.path().join("ref.exr");
+    let r = reference.to_str().unwrap();
+    let small = ["--width", "8", "--height", "8"];
+    let mut args = vec!["render", s, "--spp", "2", "-q", "-o", r];
+    args.extend(small);
+    ok(vrpt(&args));
+    let at = |f: &str| scene.join(f).to_str().unwrap().to_string();
+    let (png, mtl, toml, obj) = (
+        at("bricks.png"),
+        at("textured.mtl"),
+        at("scene.toml"),
+        at("textured.obj"),
+    );
+    let compare = ["compare", s, "--reference", r, "--runs", "2", "--spp", "1"];
+    let converge = [
+        "converge",
+        s,
+        "--reference",
+        r,
+        "--runs",
+        "2",
+        "--spp",
+        "1,2",
+    ];
+    let mut cases: Vec<Vec<&str>> = Vec::new();
+    for experiment in [&compare[..], &converge[..]] {
+        for (flag, file) in [
+            ("--csv", &toml),
+            ("--csv", &mtl),
+            ("--json", &obj),
+            ("--report", &toml),
+        ] {
+            cases.push([experiment, &[flag, file.as_str()]].concat());
+        }
+    }
+    cases.push([&compare[..], &["--grid", png.as_str()]].concat());
+    cases.push([&converge[..], &["--plot", png.as_str()]].concat());
+    cases.push(vec!["render", s, "--spp-map", &png, "-o", "x.png"]);
+    cases.push(vec!["guide", s, "--pixel", "4,4", "-o", &png]);
+    for args in cases {
+        let what = args.join(" ");
+        assert_one_line_error(&vrpt(&args), &what, "the scene's file");
+        for (f, bytes) in &files {
+            assert!(&std::fs::read(f).unwrap() == bytes, "{what} touched {f:?}");
+        }
+    }
 }
 
 /// Second review (issue 34): every float flag refuses NaN, infinities and values past its

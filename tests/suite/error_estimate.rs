@@ -286,3 +286,59 @@ fn adaptive_renders_do_not_depend_on_threads() {
     assert!(a.2.is_some_and(|n| n >= 3));
     assert_eq!(a, b);
 }
+
+/// Third review (issue 46), what a render records is what it rendered:
+/// - an adaptive render that finishes uniformly records the spp its pixels hold (its first
+///   round, kept from a sliver of a grid, had planned 11 spp per replicate and rendered 9:
+///   `--spp 704` recorded 704 and held 696);
+/// - the rest after that first round, a size the code derives (1037 − 4·16 = 973 = 7·139, a
+///   sliver), renders in sets kept from slivers, as every pass but a last short one does;
+/// - a render whose spp ran out before every replicate had a pass records the replicates that
+///   rendered (`--replicates 4 --pass-spp 64 --spp 64` recorded 4 and rendered 1).
+#[test]
+fn renders_record_the_samples_and_replicates_they_hold() {
+    let scene = shipped("cornell-box");
+    let base = RenderSettings {
+        width: 8,
+        height: 8,
+        seed: seed(46),
+        replicates: 4,
+        ..RenderSettings::default()
+    };
+    let uniform_after_one_round = PassPlan {
+        adaptive: true,
+        min_allocation_gain: Some(1e9),
+        ..PassPlan::default()
+    };
+    for spp in [704, 1037] {
+        let s = RenderSettings {
+            spp,
+            ..base.clone()
+        };
+        let r = run(&scene, &s, &uniform_after_one_round);
+        assert!(r.finished_uniformly.is_some());
+        assert_eq!(r.spp, spp);
+        assert!(r.film.sample_counts().iter().all(|&n| n == spp), "{spp}");
+        assert_eq!(r.passes.iter().sum::<u32>(), spp);
+        let (_, body) = r.passes.split_last().unwrap();
+        for &p in body {
+            assert_eq!(
+                vrpt::sampler::stratifiable(p as u64),
+                p as u64,
+                "{:?}",
+                r.passes
+            );
+        }
+    }
+    for (pass, spp, rendered) in [(64, 64, 1), (16, 48, 3), (16, 64, 4), (16, 80, 4)] {
+        let s = RenderSettings {
+            spp,
+            ..base.clone()
+        };
+        let plan = PassPlan {
+            pass_spp: Some(pass),
+            ..PassPlan::default()
+        };
+        assert_eq!(run(&scene, &s, &plan).replicates, rendered, "{pass} {spp}");
+    }
+}

@@ -460,6 +460,15 @@ fn images_whose_metadata_or_content_is_wrong_are_refused() {
         ),
         (edited("wide.exr", "width", Some("5")), &["5×4"]),
         (edited("pass0.exr", "pass_spp", Some("0")), &["pass_spp"]),
+        (
+            edited("passes0.exr", "passes", Some("16,0,32")),
+            &["passes"],
+        ),
+        (edited("passesx.exr", "passes", Some("16,,32")), &["passes"]),
+        (
+            edited("passesneg.exr", "passes", Some("16,-32")),
+            &["passes"],
+        ),
         (edited("shard.exr", "shard", Some("4/4")), &["shard"]),
         (
             edited("variance.exr", "image", Some("variance of the mean")),
