@@ -41,6 +41,9 @@ pub enum Command {
     /// Show what path guiding learned at a pixel's first hit, beside the incident radiance there
     /// (the guide of a render of --spp, whose training takes about half of them).
     Guide(vrpt::commands::guide::GuideRequest),
+    /// Say what the loader finds in a scene: files, triangles, bounds, materials, emitters and
+    /// their power, textures, the camera it would use, memory, and every warning.
+    Info(vrpt::commands::info::InfoRequest),
 }
 
 /// An experiment's request, and whether to show its progress bar.
@@ -77,6 +80,7 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
         Command::Integrate(r) => ok(vrpt::commands::integrate::run(&r).map(|o| out(&o.table()))),
         Command::Warptest(r) => ok(vrpt::commands::warptest::run(&r).map(|o| out(&o.table()))),
         Command::Guide(r) => ok(vrpt::commands::guide::run(&r).map(|o| out(&o.summary()))),
+        Command::Info(r) => ok(vrpt::commands::info::run(&r).map(|o| out(&o.text()))),
     }
 }
 

@@ -1,14 +1,15 @@
 //! A material as the MTL describes it: `Kd → kd`, `Ks → ks`, `Ns → n`, `Ke → emission`
 //! (one-sided, on the front face). Where `kd + ks > 1` in a channel both are scaled down in that
 //! channel, so the modified Phong BSDF ([`crate::bsdf`]) that `Scene::bsdf_at` builds from it
-//! conserves energy.
+//! conserves energy. A mirror or glass (`illum` 3–7 in the MTL) scatters with a delta lobe
+//! instead ([`Material::specular`], [`crate::bsdf::Specular`]): its Phong reflectances are zero.
 //!
 //! Textures ([`Maps`], the MTL's `map_Kd`, `map_Ks`, `map_Ns`) multiply their constants, as the
 //! MTL format says (`Kd 1 1 1` with `map_Kd` shows the texture as it is): at a point of texture
 //! coordinates `uv`, `kd·T_kd(uv)`, `ks·T_ks(uv)`, `n·T_Ns(uv)` (the scalar maps read their red
 //! channel), scaled down per channel where `kd + ks > 1` (only an HDR texture can get there).
 
-use crate::bsdf::Bsdf;
+use crate::bsdf::{Bsdf, Specular};
 use crate::texture::{TextureRef, TextureSet};
 use glam::{Vec2, Vec3};
 
@@ -61,6 +62,13 @@ pub struct Material {
     bsdf: Bsdf,
     /// Its textures (none by default).
     pub maps: Maps,
+    /// A mirror's or glass's delta lobe (none by default), beside a diffuse Phong part (a
+    /// mirror of `illum 3` reflects `Ks` over a diffuse `Kd`, as the MTL spec's model says) or
+    /// alone (glass; a mirror of black `Kd`).
+    pub specular: Option<Specular>,
+    /// The probability a bounce takes the delta lobe: 1 where it is alone, else its share of
+    /// the albedo, `avg(Ks)/(avg(Ks) + avg(Kd))`.
+    pub delta_share: f32,
 }
 
 impl Material {
@@ -81,7 +89,46 @@ impl Material {
             emission: emission.max(Vec3::ZERO),
             bsdf: Bsdf::new(kd, ks, exponent),
             maps: Maps::default(),
+            specular: None,
+            delta_share: 0.0,
         };
+        (m, scaled)
+    }
+
+    /// A material that scatters with the delta lobe `specular` (a mirror or glass) over a
+    /// diffuse part `kd` (black for glass), emitting `emission`: a mirror's reflectance and `kd`
+    /// scaled down per channel where they add up to more than 1 (the flag says whether).
+    pub fn with_delta(name: &str, kd: Vec3, specular: Specular, emission: Vec3) -> (Self, bool) {
+        let (specular, kd, scaled) = match specular {
+            Specular::Mirror {
+                reflectance,
+                schlick,
+            } => {
+                let (r, kd) = (reflectance.max(Vec3::ZERO), kd.max(Vec3::ZERO));
+                let scale = Vec3::ONE / (r + kd).max(Vec3::ONE);
+                let reflectance = r * scale;
+                let m = Specular::Mirror {
+                    reflectance,
+                    schlick,
+                };
+                (m, kd * scale, (r + kd).max_element() > 1.0)
+            }
+            glass => (glass, Vec3::ZERO, false),
+        };
+        let mut m = Material::new(name, kd, Vec3::ZERO, 1.0, emission).0;
+        let share = match specular {
+            Specular::Mirror { reflectance, .. } => {
+                let (r, d) = (crate::math::average(reflectance), crate::math::average(kd));
+                if r + d > 0.0 {
+                    r / (r + d)
+                } else {
+                    1.0
+                }
+            }
+            Specular::Dielectric { .. } => 1.0,
+        };
+        m.specular = Some(specular);
+        m.delta_share = share;
         (m, scaled)
     }
 

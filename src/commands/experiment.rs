@@ -16,7 +16,7 @@ use crate::image_io::{
 use crate::limits::{parse_exposure, parse_seconds, parse_threads};
 use crate::output::RenderMetadata;
 use crate::render::Progress;
-use crate::scene::{self, Scene};
+use crate::scene::Scene;
 use crate::strategy::{Strategies, Strategy};
 use std::path::PathBuf;
 
@@ -29,6 +29,8 @@ pub struct ExperimentRequest {
     /// The converged reference EXR (its size and max depth are used; its scene hash must match).
     #[arg(long)]
     pub reference: PathBuf,
+    #[command(flatten)]
+    pub load: super::LoadArgs,
     /// Strategies, comma-separated (default: the six presets).
     #[arg(long, value_parser = Strategies::parse, default_value = "independent,stratified,importance,combined,nee,mis",
           long_help = Strategy::list_help())]
@@ -180,7 +182,7 @@ fn prepare_common(
         return Err(Error::Settings("no strategies to run".into()));
     }
     a.entries()?;
-    let scene = scene::load(&a.scene)?;
+    let scene = a.load.load(&a.scene)?;
     // and the files the scene was read from (its textures, MTLs, scene.toml)
     super::check_against_scene(&outputs, &scene)?;
     let reference = read_exr(&a.reference)?;

@@ -27,7 +27,7 @@ use crate::image_io::{check_writable, Format};
 use crate::integrator::{radiance, IntegratorSettings, RayCounts};
 use crate::render::{learn_guide, RenderSettings};
 use crate::sampler::{IndependentSampler, Sampler};
-use crate::scene::{self, Scene};
+use crate::scene::Scene;
 use crate::strategy::{Strategy, StrategyArgs};
 use glam::{UVec2, Vec2, Vec3};
 use rayon::prelude::*;
@@ -47,6 +47,8 @@ pub struct GuideRequest {
     /// The render whose guide is learned (its training takes about half its spp).
     #[command(flatten)]
     pub image: ImageArgs,
+    #[command(flatten)]
+    pub load: super::LoadArgs,
     /// Seed of the render whose guide is learned.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -195,7 +197,7 @@ fn check_request(req: &GuideRequest) -> Result<()> {
 /// the request's); an error where the output would overwrite a file of the scene or the pixel
 /// lies outside the image.
 fn load_scene(req: &GuideRequest) -> Result<(Scene, RenderSettings)> {
-    let scene = scene::load(&req.scene)?;
+    let scene = req.load.load(&req.scene)?;
     super::check_against_scene(&[("-o", &req.output)], &scene)?;
     let settings = RenderSettings {
         seed: req.seed,

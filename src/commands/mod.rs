@@ -12,6 +12,7 @@
 //! - [`diff`]: an image against a reference: metrics, regions, error map, report;
 //! - [`experiment`]: `compare` and `converge`, with their CSV, JSON, grid, plots and report;
 //! - [`guide`]: what path guiding learned at one point, beside the incident radiance there;
+//! - [`info`]: what the loader found in a scene, and the camera and light it would use;
 //! - [`points`]: a sampler's points in the unit square, their discrepancy and spectrum;
 //! - [`integrate`]: known-answer integrals by each sampler against the variance formulas;
 //! - [`warptest`]: every warp's samples against its integrated pdf, chi-square and ∫pdf.
@@ -19,6 +20,7 @@
 pub mod diff;
 pub mod experiment;
 pub mod guide;
+pub mod info;
 pub mod integrate;
 pub mod merge;
 pub mod points;
@@ -62,6 +64,24 @@ impl ImageArgs {
             max_depth: self.max_depth.unwrap_or(d.max_depth),
             ..d
         }
+    }
+}
+
+/// How a command reads a scene (every command that loads one).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::Args)]
+pub struct LoadArgs {
+    /// Refuse what a scene made elsewhere is forgiven with a warning: a texture or material
+    /// library found only by another letter case, separator or folder, a texture that cannot be
+    /// found or read (otherwise its material's constant colour), a malformed statement vrpt
+    /// does not use.
+    #[arg(long)]
+    pub strict: bool,
+}
+
+impl LoadArgs {
+    /// Load the scene at `path` as these flags say.
+    pub fn load(&self, path: &Path) -> Result<Scene> {
+        crate::scene::load_with(path, self.strict)
     }
 }
 

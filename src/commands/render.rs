@@ -12,7 +12,7 @@ use crate::render::{
     render_passes, shard_range, PassPlan, Progress, RenderSettings, RenderStats, Rendered,
     ACTING_REPLICATES,
 };
-use crate::scene::{self, Scene};
+use crate::scene::Scene;
 use crate::strategy::StrategyArgs;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
@@ -31,6 +31,8 @@ pub struct RenderRequest {
     pub output: Option<PathBuf>,
     #[command(flatten)]
     pub image: ImageArgs,
+    #[command(flatten)]
+    pub load: super::LoadArgs,
     /// Seed of every random number: the same seed gives the same image.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -132,6 +134,8 @@ pub struct RenderOutcome {
     pub interrupted: bool,
     /// The replicates asked for, where fewer rendered (`settings.replicates` says how many).
     pub missing_replicates: Option<u32>,
+    /// Why the image is black or nearly so, and what would light it (none where it is not).
+    pub black: Option<String>,
     /// The scene, the speed and the rays, in three lines ([`RenderStats::summary`]).
     pub summary: String,
     /// Where the time went ([`RenderStats::timing`]).
@@ -165,7 +169,7 @@ impl RenderRequest {
             .unwrap_or_else(|| default_output(&self.scene));
         let outputs = self.check_outputs(&output)?;
         let start = Instant::now();
-        let scene = scene::load(&self.scene)?;
+        let scene = self.load.load(&self.scene)?;
         let load_time = start.elapsed();
         // and the files the scene was read from
         super::check_against_scene(&outputs, &scene)?;
@@ -275,6 +279,9 @@ impl RenderOutcome {
                 self.stats.nonfinite
             ));
         }
+        if let Some(why) = &self.black {
+            w.push(why.clone());
+        }
         if let Some(asked) = self.missing_replicates {
             w.push(format!(
                 "only {} of the {asked} replicates rendered (the spp or the time ran out after \
@@ -346,8 +353,45 @@ impl PreparedRender {
             interrupted: r.interrupted,
             missing_replicates: (r.finished_uniformly.is_none() && r.replicates < asked_replicates)
                 .then_some(asked_replicates),
+            black: why_black(&self.scene, &r.film),
         })
     }
+}
+
+/// The mean luminance below which an image is black or nearly so: a thousandth of a white
+/// diffuse surface under a white sky; its PNG's pixels are at most 3 of 255.
+pub const BLACK_LUMINANCE: f64 = 1e-3;
+
+/// Why the image of `film` is black or nearly so (its mean luminance below
+/// [`BLACK_LUMINANCE`]), in one line that says what would light it; `None` for an image that is
+/// not.
+pub fn why_black(scene: &Scene, film: &crate::film::Film) -> Option<String> {
+    let n = film.len().max(1) as f64;
+    let mean = (0..film.len())
+        .map(|i| crate::math::luminance(film.mean(i).as_vec3()) as f64)
+        .sum::<f64>()
+        / n;
+    if mean >= BLACK_LUMINANCE {
+        return None;
+    }
+    let lights = &scene.lights;
+    let environment = lights.environment.luminance_integral();
+    let why = match (lights.emitters.len(), environment > 0.0) {
+        (0, false) => "the scene has no emitter and its environment is black".to_string(),
+        (n, false) => {
+            let power: f32 = lights.emitters.iter().map(|e| e.power()).sum();
+            format!(
+                "no emitter's light reached the camera: the environment is black and the \
+                 scene's {n} emitters (total power {power:.3}) light nothing it sees"
+            )
+        }
+        (_, true) => "little light reaches what the camera sees".to_string(),
+    };
+    Some(format!(
+        "the image is black (mean luminance {mean:.1e}): {why}; `[environment] radiance = \
+         [1, 1, 1]` in scene.toml lights it from outside, a `[camera]` block (eye, target, up, \
+         fov) looks elsewhere, --exposure brightens the PNG"
+    ))
 }
 
 /// The pass sizes a render records: all of them, where any but the last differs from the

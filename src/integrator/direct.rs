@@ -14,14 +14,15 @@ use glam::Vec3;
 
 impl Path<'_> {
     /// What the light sample at `v` adds to the path's radiance (throughput `beta` so far), or
-    /// `None` where it adds nothing: no light sampling (`bsdf`, or a scene without lights), no
+    /// `None` where it adds nothing (`share`: the probability a bounce samples `bsdf`, less than
+    /// 1 beside a delta lobe, so the bounce's pdf in the MIS weight is `share·p_bsdf`): no light sampling (`bsdf`, or a scene without lights), no
     /// light, a light behind the surface, a black BSDF in its direction, or a blocked shadow ray.
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     pub(super) fn next_event(
         &self,
         v: &Vertex,
-        bsdf: &Bsdf,
+        (bsdf, share): (&Bsdf, f32),
         g: Option<&GuideAt>,
         u: &BounceSample,
         beta: Vec3,
@@ -56,7 +57,7 @@ impl Path<'_> {
             {
                 let w = match settings.lights {
                     LightStrategy::Mis => {
-                        let p = bsdf.pdf(v.wo_local, wi_local, settings.directions);
+                        let p = bsdf.pdf(v.wo_local, wi_local, settings.directions) * share;
                         let p = g.map_or(p, |g| g.mixture_pdf(ls.wi, p));
                         mis_weight(ls.pdf, p)
                     }

@@ -51,7 +51,7 @@ pub use recorder::MAX_RECORDED_BOUNCES;
 use recorder::{Mixture, PathRecorder, Training};
 
 use crate::accel::TraceStack;
-use crate::bsdf::{Bsdf, BsdfSample, Directions};
+use crate::bsdf::{Bsdf, BsdfSample, Directions, Specular};
 use crate::guiding::{canonical_to_dir, dir_to_canonical, Guide, GuideAt, Record};
 use crate::lights::{LightChoice, LightPoints, LightSampler, LightStrategy};
 use crate::math::Frame;
@@ -182,6 +182,9 @@ struct Previous {
     n: Vec3,
     /// The BSDF pdf of the sampled direction.
     pdf: f32,
+    /// Whether the direction came from a delta lobe (a mirror or glass): no light sample could
+    /// have found what it reaches, which then counts whole.
+    delta: bool,
 }
 
 impl Previous {
@@ -192,6 +195,7 @@ impl Previous {
             p: v.p,
             n: v.ns,
             pdf,
+            delta: false,
         }
     }
 }
@@ -350,6 +354,17 @@ impl<'a> Path<'a> {
                 break;
             }
             let bsdf = scene.bsdf_at(&s);
+            let delta = scene.material_at(&s).specular.filter(|d| !d.is_black());
+            if let Some(d) = delta {
+                let v = Vertex::new(scene, &s, front, wo);
+                let lobes = (d, scene.material_at(&s).delta_share, front);
+                let (nee, next) =
+                    self.delta_vertex(&v, &bsdf, lobes, segment, sampler, &mut beta, rays, stack);
+                l += nee;
+                let Some((o, wi, p)) = next else { break };
+                ((origin, dir), prev) = ((o, wi), Some(p));
+                continue;
+            }
             if bsdf.is_black() {
                 break;
             }
@@ -363,7 +378,7 @@ impl<'a> Path<'a> {
             );
             let v = Vertex::new(scene, &s, front, wo);
             let g = self.guide.map(|t| GuideAt::new(t, s.p));
-            if let Some(d) = self.next_event(&v, &bsdf, g.as_ref(), &u, beta, rays, stack) {
+            if let Some(d) = self.next_event(&v, (&bsdf, 1.0), g.as_ref(), &u, beta, rays, stack) {
                 l += d;
             }
             let Some((wi, bs, mix)) = self.sample_direction(&v, &bsdf, g.as_ref(), &u) else {
@@ -390,6 +405,85 @@ impl<'a> Path<'a> {
         l
     }
 
+    /// A vertex with a delta lobe (a mirror or glass, [`Specular`]), alone or beside the Phong
+    /// part `bsdf` with probability `share` (`lobes`: the lobe, its share, and whether the ray
+    /// arrived from the surface's front, the outside of glass). The delta lobe is taken with
+    /// probability `share`, its weight `f|cosθ|/p` divided by it; the Phong part otherwise, its
+    /// pdf times `1 − share`, with a light sample and Russian roulette as at any vertex. No light
+    /// sample reaches through the delta lobe, the guide is not used (its dimensions are skipped),
+    /// and roulette skips a delta bounce. What the light sample adds, and the next ray (origin,
+    /// direction, and the vertex it left) unless the path ends.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn delta_vertex<S: Sampler>(
+        &self,
+        v: &Vertex,
+        bsdf: &Bsdf,
+        (lobe, share, front): (Specular, f32, bool),
+        segment: u32,
+        sampler: &mut S,
+        beta: &mut Vec3,
+        rays: &mut RayCounts,
+        stack: &mut TraceStack,
+    ) -> (Vec3, Option<(Vec3, Vec3, Previous)>) {
+        let mixed = share < 1.0;
+        let roulette = mixed && segment >= RR_START_BOUNCE;
+        let u = BounceSample::draw_needed(
+            sampler,
+            self.sample_lights && mixed,
+            mixed || lobe.chooses(),
+            roulette,
+            false,
+        );
+        if self.settings.directions == Directions::Guided {
+            sampler.skip_1d(1);
+            sampler.skip_2d(1);
+        }
+        let mut nee = Vec3::ZERO;
+        if mixed {
+            if let Some(d) = self.next_event(v, (bsdf, 1.0 - share), None, &u, *beta, rays, stack) {
+                nee = d;
+            }
+        }
+        if !mixed || u.lobe < share {
+            let u_choice = if mixed { u.lobe / share } else { u.lobe };
+            let Some(smp) = lobe.sample(v.wo_local, front, u_choice) else {
+                return (nee, None);
+            };
+            let wi = v.frame.to_world(smp.wi);
+            let side = wi.dot(v.ng);
+            // a reflection stays on the viewer's side of the geometry, a refraction crosses it
+            if (smp.transmitted && side >= 0.0) || (!smp.transmitted && side <= 0.0) {
+                return (nee, None);
+            }
+            *beta *= smp.weight / share;
+            let origin = if smp.transmitted {
+                v.p - v.ng * self.scene.ray_epsilon
+            } else {
+                v.spawn
+            };
+            let prev = Previous {
+                delta: true,
+                ..Previous::left(v, 0.0)
+            };
+            return (nee, Some((origin, wi, prev)));
+        }
+        let directions = self.settings.directions;
+        let Some(bs) = bsdf.sample(v.wo_local, u.lobe, u.direction, directions) else {
+            return (nee, None);
+        };
+        let pdf = bs.pdf * (1.0 - share);
+        let wi = v.frame.to_world(bs.wi);
+        if wi.dot(v.ng) <= 0.0 || pdf <= 0.0 {
+            return (nee, None);
+        }
+        *beta *= bs.f * (bs.wi.z / pdf);
+        if roulette && !survives(beta, u.roulette, None) {
+            return (nee, None);
+        }
+        (nee, Some((v.spawn, wi, Previous::left(v, pdf))))
+    }
+
     /// What the surface hit at `s` (primitive `prim`, seen from its front or not) emits toward
     /// the path, and its weight ([`Self::emission_weight`]); `None` where it emits nothing.
     #[inline(always)]
@@ -412,9 +506,10 @@ impl<'a> Path<'a> {
     }
 
     /// The weight of emission a path reaches (a surface's, or the environment's where it
-    /// escapes), seen from the vertex `prev` it left (`None`: the camera): 1 for the camera ray
-    /// and under `bsdf`, 0 under `nee` (the light samples counted it), and under `mis`
-    /// `w(p_bsdf, p_light)` with `p_light(prev)` the pdf light sampling at `prev` gives it.
+    /// escapes), seen from the vertex `prev` it left (`None`: the camera): 1 for the camera ray,
+    /// under `bsdf` and after a delta lobe (no light sample can reach through one), 0 under
+    /// `nee` (the light samples counted it), and under `mis` `w(p_bsdf, p_light)` with
+    /// `p_light(prev)` the pdf light sampling at `prev` gives it.
     #[inline(always)]
     fn emission_weight(
         &self,
@@ -423,6 +518,7 @@ impl<'a> Path<'a> {
     ) -> f32 {
         match (self.settings.lights, prev) {
             (_, None) | (LightStrategy::Bsdf, _) => 1.0,
+            (_, Some(v)) if v.delta => 1.0,
             (LightStrategy::Nee, _) => 0.0,
             (LightStrategy::Mis, Some(v)) => mis_weight(v.pdf, p_light(&v)),
         }

@@ -3,6 +3,7 @@
 //! texture coordinates, maps and texels.
 
 use super::Mesh;
+use crate::bsdf::Specular;
 use crate::camera::CameraDesc;
 use crate::environment::Environment;
 use crate::material::Material;
@@ -33,6 +34,21 @@ pub(super) fn content_hash(
     for m in materials {
         put(&mut w, &[m.kd(), m.ks(), m.emission]);
         w.push(m.exponent().to_bits() as u64);
+        // a delta lobe's words only where there is one: the hash of a scene without stays
+        match m.specular {
+            None => {}
+            Some(Specular::Mirror {
+                reflectance,
+                schlick,
+            }) => {
+                w.push(0x4d49_5252_4f52 | (schlick as u64) << 48); // "MIRROR"
+                put(&mut w, &[reflectance]);
+            }
+            Some(Specular::Dielectric { ior, transmittance }) => {
+                w.extend([0x0047_4c41_5353, ior.to_bits() as u64]); // "GLASS"
+                put(&mut w, &[transmittance]);
+            }
+        }
     }
     put(&mut w, &[camera.eye, camera.target, camera.up]);
     // a constant environment's three words stand where they always stood: old hashes hold

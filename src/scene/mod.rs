@@ -5,12 +5,18 @@
 //! Conventions: right-handed, y up. A triangle's geometric normal `ng = (v1−v0)×(v2−v0)` follows
 //! its counter-clockwise winding; emission is one-sided, on the side `ng` points to. Shading is
 //! two-sided: the integrator flips the shading frame to the side the ray arrives from.
-//! Without a description the camera frames the bounding box from +z, and a scene with no
-//! emitter gets a uniform white environment (radiance 1) so any OBJ renders visibly.
+//! Without a description the camera frames the bounding box from +z, or stands inside where
+//! that view shows the backs of surfaces; a scene with no emitter, or whose emitters light
+//! almost nothing the camera sees, gets a uniform white environment (radiance 1), so any OBJ
+//! renders visibly ([`auto`]).
 
+pub mod auto;
 pub mod description;
+pub mod files;
 pub mod generate;
+pub mod mtl;
 pub mod obj;
+pub mod objparse;
 
 mod hash;
 
@@ -110,6 +116,11 @@ pub struct SceneOptions {
     pub defaults: RenderSection,
     /// The materials' textures.
     pub textures: TextureSet,
+    /// Where the camera or the environment is not given, choose them from a survey of the
+    /// scene ([`auto`]: a view that sees the fronts of surfaces, a white environment where the
+    /// emitters light almost nothing it sees), as a scene loaded without a description does;
+    /// without it, the view from +z and a white environment only for a scene without emitters.
+    pub auto_view: bool,
 }
 
 impl Scene {
@@ -126,20 +137,58 @@ impl Scene {
         let accel = Accel::build(&positions);
         let (lo, hi) = bounds(&positions);
         let shading = shading_in_bvh_order(&accel, &mesh);
-        let has_emitters = shading
-            .iter()
-            .any(|s| materials[s.material as usize].is_emissive());
+        let extent = lo
+            .abs()
+            .max(hi.abs())
+            .max_element()
+            .max((hi - lo).max_element());
+        let ray_epsilon = 1e-5 * extent.max(1e-3);
+        let emitters = emitters_of(&accel, &shading, &materials);
+        // without a camera of its own: a view that sees the fronts of surfaces (scene::auto)
+        let (camera, seen) = match options.camera {
+            Some(c) => (c, None),
+            None if !options.auto_view => (frame_bounds(lo, hi), None),
+            None => {
+                let g = auto::Geometry {
+                    accel: &accel,
+                    shading: &shading,
+                    emitters: &emitters,
+                    epsilon: ray_epsilon,
+                };
+                let outside = frame_bounds(lo, hi);
+                let (c, s) = auto::choose_camera(&g, (lo, hi), outside);
+                if c != outside {
+                    warnings.push(format!(
+                        "from outside the scene shows the backs of its surfaces: the camera is \
+                         placed inside, at {} looking toward {} (a [camera] in scene.toml \
+                         chooses another)",
+                        show(c.eye),
+                        show(c.target)
+                    ));
+                }
+                (c, Some(s))
+            }
+        };
         let environment = options.environment.unwrap_or_else(|| {
-            if !has_emitters {
+            if emitters.is_empty() {
                 warnings.push("no emitters: lighting with a uniform white environment".into());
+                Environment::Constant(Vec3::ONE)
+            } else if seen.as_ref().is_some_and(auto::too_dark) {
+                let power: f32 = emitters.iter().map(|e| e.power()).sum();
+                warnings.push(format!(
+                    "the scene's {} emitting triangles (power {power:.3}) light almost nothing \
+                     the camera sees (direct brightness {:.1e}): lighting it also with a \
+                     uniform white environment ([environment] radiance = [0, 0, 0] in \
+                     scene.toml keeps it dark)",
+                    emitters.len(),
+                    seen.map_or(0.0, |s| s.direct)
+                ));
                 Environment::Constant(Vec3::ONE)
             } else {
                 Environment::Constant(Vec3::ZERO)
             }
         });
         let radius = 0.5 * (hi - lo).length();
-        let emitters = emitters_of(&accel, &shading, &materials);
-        let camera = options.camera.unwrap_or_else(|| frame_bounds(lo, hi));
         let mut hash = content_hash(&mesh, &materials, &camera, &environment);
         if !options.textures.textures.is_empty() {
             hash = texture_hash(hash, &mesh, &materials, &options.textures);
@@ -151,11 +200,6 @@ impl Scene {
                     message,
                 }
             })?;
-        let extent = lo
-            .abs()
-            .max(hi.abs())
-            .max_element()
-            .max((hi - lo).max_element());
         Ok(Scene {
             source,
             accel,
@@ -163,7 +207,7 @@ impl Scene {
             lights,
             camera,
             defaults: options.defaults,
-            ray_epsilon: 1e-5 * extent.max(1e-3),
+            ray_epsilon,
             warnings,
             hash,
             cutouts: materials.iter().any(|m| m.maps.opacity.is_some()),
@@ -411,6 +455,11 @@ fn emitters_of(accel: &Accel, shading: &[TriShading], materials: &[Material]) ->
         .collect()
 }
 
+/// `(x, y, z)` to three significant digits, for a message.
+fn show(v: Vec3) -> String {
+    format!("({:.3}, {:.3}, {:.3})", v.x, v.y, v.z)
+}
+
 /// A camera looking at the bounding box from +z, far enough back to see all of it at 40°.
 fn frame_bounds(lo: Vec3, hi: Vec3) -> CameraDesc {
     let centre = 0.5 * (lo + hi);
@@ -428,6 +477,13 @@ fn frame_bounds(lo: Vec3, hi: Vec3) -> CameraDesc {
 /// Load a scene from an `.obj` (with a `scene.toml` beside it that names it, if any), a
 /// `scene.toml`, or a folder holding a `scene.toml`.
 pub fn load(path: &Path) -> Result<Scene> {
+    load_with(path, false)
+}
+
+/// [`load`], refusing with `strict` what a lenient load only warns of: a texture or material
+/// library found by another name than written, a texture that cannot be found or read, a
+/// malformed statement skipped ([`obj`]).
+pub fn load_with(path: &Path, strict: bool) -> Result<Scene> {
     if !path.exists() {
         return Err(Error::NotFound {
             path: path.to_path_buf(),
@@ -471,7 +527,7 @@ pub fn load(path: &Path) -> Result<Scene> {
             }
         }
     };
-    let obj = obj::load_obj(&obj_path)?;
+    let obj = obj::load_obj(&obj_path, strict)?;
     let desc_env_file: Option<PathBuf> = desc.as_ref().and_then(|(d, toml)| {
         let map = d.environment.as_ref()?.map.as_ref()?;
         Some(toml.parent().unwrap_or(Path::new(".")).join(map.get_ref()))
@@ -489,9 +545,11 @@ pub fn load(path: &Path) -> Result<Scene> {
             environment: d.environment.map(|e| environment(&e, &toml)).transpose()?,
             defaults: d.render.unwrap_or_default(),
             textures,
+            auto_view: false,
         },
         None => SceneOptions {
             textures,
+            auto_view: true,
             ..SceneOptions::default()
         },
     };

@@ -1,24 +1,43 @@
-//! Wavefront OBJ + MTL loading through tobj: triangulated (fan), one index per vertex.
+//! Loading an OBJ scene: the OBJ text ([`super::objparse`]), its material libraries
+//! ([`super::mtl`]), their textures, into a triangle soup and vrpt's materials. Files are read
+//! as the reference loaders read them (tinyobjloader, Blender's and Mitsuba's importers), so
+//! scenes made elsewhere load: comments anywhere on a line, statements vrpt does not use skipped
+//! whatever they hold (one warning per file, by kind), file names with `\`, quotes or another
+//! letter case found ([`super::files`]), a texture that cannot be found or read replaced by the
+//! material's constant colour with a warning. A malformed number in a statement vrpt uses is
+//! refused with its file and line. With `strict` every such leniency (a texture not found as
+//! written or not read, a malformed statement skipped) is refused instead.
 //!
-//! MTL → material: `Kd → kd` (default 0.5 grey, or 0 for a material that only emits), `Ks → ks`
-//! (default 0), `Ns → n` (default 1), `Ke → emission` (default 0). A missing MTL file or a
-//! `usemtl` naming an unknown material falls back to a grey diffuse material with a warning that
-//! names it; a malformed MTL is an error. OBJ parse errors are located by line number with a
-//! light pre-scan (tobj reports the kind of error only).
+//! MTL → material ([`material_of`]):
+//! - `illum` 3: a mirror of reflectance `Ks` (1 where absent) over a diffuse `Kd` (0 where
+//!   absent), as the MTL spec's model adds them; `illum` 5 the same with the mirror weighted by
+//!   Schlick's Fresnel with `Ks` at normal incidence;
+//! - `illum` 4, 6, 7, 9 on a material that lets light through (`Tf` below 1, or `d` below 1):
+//!   smooth glass of index `Ni` (1.5 where absent or not above 1) and transmittance `1 − Tf`
+//!   (the convention of 3ds Max and of the files that carry `Tf`: the Cornell box variants'
+//!   clear water says `Tf 0.1`, and opaque materials say `Tf 1 1 1`), or 1 for glass by `d`;
+//!   on an opaque material (Cinema 4D writes `illum 7` everywhere) the Phong material, noted;
+//! - any other: the modified Phong material, `Kd → kd` (default 0.5 grey, or 0 for a material
+//!   that only emits), `Ks → ks` (default 0), `Ns → n` (default 1); a `Ks` near 1 with a high
+//!   `Ns` stays the Phong lobe it is.
 //!
-//! Textures: the MTL's `map_Kd`, `map_Ks`, `map_Ns`, `map_d`, `bump`/`map_Bump` and `norm`
-//! statements are read here ([`parse_maps`]: the options `-s`, `-o`, `-bm`; others skipped and
-//! named in one warning), their files loaded once each ([`crate::texture::TextureSet`]) into the
-//! materials' [`crate::material::Maps`]; a file that cannot be read is an error naming the MTL
-//! line.
+//! `Ke → emission` (default 0) in every case. A missing MTL file or a `usemtl` naming an unknown
+//! material falls back to a grey diffuse material with a warning that names it.
+//!
+//! Triangles: each face a fan (in file order); vertex normals where all three corners have a
+//! finite non-zero `vn`, texture coordinates where all three have a `vt`; zero-area triangles
+//! skipped and counted.
 
+use super::files::{self, Found};
+use super::mtl::{self, MapLine, MtlEntry};
+use super::objparse::{self, Corner, NONE};
 use super::{Mesh, MeshTriangle};
+use crate::bsdf::Specular;
 use crate::error::{clip, Error, Result};
-use crate::limits::MAX_MAGNITUDE;
 use crate::material::Material;
 use crate::texture::{Decode, TextureRef, TextureSet};
-use glam::{Vec2, Vec3};
-use std::collections::BTreeSet;
+use glam::Vec3;
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 /// What an OBJ file gave: its triangles, materials and their textures, the material libraries
@@ -27,417 +46,379 @@ pub struct ObjFile {
     pub mesh: Mesh,
     pub materials: Vec<Material>,
     pub textures: TextureSet,
-    /// The MTL files read (those its `mtllib` statements name that exist).
+    /// The MTL files read.
     pub libraries: Vec<PathBuf>,
     pub warnings: Vec<String>,
 }
 
-/// Load `path` into a triangle soup, its materials, their textures and any warnings.
-pub fn load_obj(path: &Path) -> Result<ObjFile> {
-    let text = crate::error::read_text(path)?;
-    let mut warnings = Vec::new();
-    let options = tobj::LoadOptions {
-        triangulate: true,
-        single_index: true,
-        ..Default::default()
+/// The warnings of a load, and whether leniencies are refused.
+struct Notes {
+    strict: bool,
+    warnings: Vec<String>,
+}
+
+impl Notes {
+    /// A leniency about `path`: a warning, or with `strict` the error.
+    fn lenient(&mut self, path: &Path, message: String) -> Result<()> {
+        if self.strict {
+            return Err(Error::Scene {
+                path: path.to_path_buf(),
+                message: format!("{message} (refused by --strict)"),
+            });
+        }
+        self.warnings.push(format!("{}: {message}", path.display()));
+        Ok(())
+    }
+}
+
+/// A text file: UTF-8 (a byte-order mark dropped, invalid bytes, names written in another
+/// encoding, replaced), or UTF-16 where it starts with that byte-order mark.
+pub(super) fn read_text(path: &Path) -> Result<String> {
+    let bytes = std::fs::read(path).map_err(|e| match e.kind() {
+        std::io::ErrorKind::NotFound => Error::NotFound {
+            path: path.to_path_buf(),
+        },
+        _ => Error::Read {
+            path: path.to_path_buf(),
+            source: e,
+        },
+    })?;
+    let utf16 = |be: bool| {
+        let units: Vec<u16> = bytes[2..]
+            .chunks_exact(2)
+            .map(|c| match be {
+                true => u16::from_be_bytes([c[0], c[1]]),
+                false => u16::from_le_bytes([c[0], c[1]]),
+            })
+            .collect();
+        String::from_utf16_lossy(&units)
     };
-    let obj_error = |message: String| Error::Obj {
+    Ok(match bytes.get(..3) {
+        Some([0xfe, 0xff, _]) => utf16(true),
+        Some([0xff, 0xfe, _]) => utf16(false),
+        Some([0xef, 0xbb, 0xbf]) => String::from_utf8_lossy(&bytes[3..]).into_owned(),
+        _ => String::from_utf8(bytes)
+            .unwrap_or_else(|e| String::from_utf8_lossy(e.as_bytes()).into_owned()),
+    })
+}
+
+/// Load `path` into a triangle soup, its materials, their textures and any warnings; with
+/// `strict` a leniency is an error (module doc).
+pub fn load_obj(path: &Path, strict: bool) -> Result<ObjFile> {
+    let text = read_text(path)?;
+    let obj = objparse::parse(&text).map_err(|message| Error::Obj {
         path: path.to_path_buf(),
         message,
+    })?;
+    drop(text);
+    let mut notes = Notes {
+        strict,
+        warnings: Vec::new(),
     };
-    check_obj_text(&text).map_err(obj_error)?;
-    let (libraries, map_lines) = read_mtl_maps(path, &text, &mut warnings)?;
-    let (models, materials) =
-        tobj::load_obj(path, &options).map_err(|e| obj_error(e.to_string()))?;
-    let mut mats = convert_materials(path, &text, materials, &mut warnings)?;
-    warn_unknown_materials(path, &text, &mats, &mut warnings);
-    let fallback = mats.len() as u32;
-    let mut used_fallback = false;
-
-    let mut triangles = Vec::new();
-    let mut degenerate = 0usize;
-    for model in &models {
-        let material = match model.mesh.material_id {
-            Some(id) if id < mats.len() => id as u32,
-            _ => {
-                used_fallback = true;
-                fallback
-            }
-        };
-        degenerate += mesh_triangles(path, &model.mesh, material, &mut triangles)?;
+    if !obj.skipped.is_empty() {
+        notes.warnings.push(format!(
+            "{}: skipped statements vrpt does not use: {}",
+            path.display(),
+            kinds(&obj.skipped)
+        ));
     }
+    if let Some(first) = &obj.first_dangling {
+        notes.lenient(
+            path,
+            format!(
+                "{} faces name a texture coordinate or normal that is not defined (first at \
+                 {first}): they are drawn without it",
+                obj.dangling
+            ),
+        )?;
+    }
+    let (libraries, entries, maps) = read_libraries(path, &obj.mtllib, &mut notes)?;
+    let mut materials = Vec::with_capacity(entries.len() + 1);
+    for e in &entries {
+        let (m, said) = material_of(e);
+        notes.warnings.extend(said);
+        materials.push(m);
+    }
+    let ids = material_ids(path, &obj, &materials, &mut notes.warnings);
+    let (triangles, degenerate) = triangles(&obj, &ids, materials.len() as u32)?;
     if degenerate > 0 {
-        warnings.push(format!(
+        notes.warnings.push(format!(
             "{}: skipped {degenerate} degenerate (zero-area) triangles",
             path.display()
         ));
     }
-    if used_fallback {
-        mats.push(Material::default_grey("default-grey"));
+    if obj.smoothing && triangles.iter().any(|t| t.normals.is_none()) {
+        notes.warnings.push(format!(
+            "{}: smoothing groups (s) are not interpolated: faces without vn are shaded flat",
+            path.display()
+        ));
     }
-    let textures = attach_maps(&mut mats, &map_lines)?;
+    if triangles
+        .iter()
+        .any(|t| t.material == materials.len() as u32)
+    {
+        materials.push(Material::default_grey("default-grey"));
+    }
+    let textures = attach_maps(&mut materials, &maps, &mut notes)?;
     Ok(ObjFile {
         mesh: Mesh { triangles },
-        materials: mats,
+        materials,
         textures,
         libraries,
-        warnings,
+        warnings: notes.warnings,
     })
 }
 
-/// The MTL files read, and each texture statement with its MTL's path.
-type MtlMaps = (Vec<PathBuf>, Vec<(PathBuf, MapLine)>);
-
-/// The MTLs the OBJ `text` names (`mtllib`) that exist, and the texture statements of each,
-/// with its MTL's path; a warning per MTL that names the statements and options it ignores.
-fn read_mtl_maps(
-    path: &Path,
-    text: &str,
-    warnings: &mut Vec<String>,
-) -> Result<MtlMaps> {
-    let folder = path.parent().unwrap_or(Path::new("."));
-    let mut map_lines: Vec<(PathBuf, MapLine)> = Vec::new();
-    let mut libraries = Vec::new();
-    for name in text
-        .lines()
-        .filter_map(|l| l.trim().strip_prefix("mtllib "))
-    {
-        let p = folder.join(name.trim());
-        if p.is_file() {
-            let mtl = crate::error::read_text(&p)?;
-            check_mtl_text(&mtl).map_err(|message| Error::Mtl {
-                path: p.clone(),
-                message,
-            })?;
-            let mut ignored = BTreeSet::new();
-            let maps = parse_maps(&mtl, &mut ignored).map_err(|message| Error::Mtl {
-                path: p.clone(),
-                message,
-            })?;
-            if !ignored.is_empty() {
-                let list: Vec<&str> = ignored.iter().map(String::as_str).collect();
-                warnings.push(format!(
-                    "{}: ignored texture statements and options: {}",
-                    p.display(),
-                    clip(&list.join(", "))
-                ));
-            }
-            map_lines.extend(maps.into_iter().map(|m| (p.clone(), m)));
-            libraries.push(p);
-        }
-    }
-    Ok((libraries, map_lines))
+/// `Ka ×12, map_Ka ×2`: the kinds of statements skipped, with their counts.
+fn kinds(skipped: &BTreeMap<String, usize>) -> String {
+    let list: Vec<String> = skipped.iter().map(|(k, n)| format!("{k} ×{n}")).collect();
+    clip(&list.join(", ")).into_owned()
 }
 
-/// vrpt's materials from tobj's reading of the MTL: none (with a warning) where the MTL file is
-/// missing, an error where it is malformed, a warning for each material scaled to conserve energy.
-fn convert_materials(
-    path: &Path,
-    text: &str,
-    materials: std::result::Result<Vec<tobj::Material>, tobj::LoadError>,
-    warnings: &mut Vec<String>,
-) -> Result<Vec<Material>> {
-    let mtl_path = mtllib_path(path, text);
-    let mut mats: Vec<Material> = Vec::new();
-    match materials {
-        Ok(list) => {
-            for m in &list {
-                let (mat, scaled) = convert_material(m);
-                if scaled {
-                    warnings.push(format!(
-                        "material '{}': Kd + Ks > 1, scaled down to conserve energy",
-                        clip(&m.name)
-                    ));
-                }
-                mats.push(mat);
-            }
-        }
-        Err(tobj::LoadError::OpenFileFailed) => {
-            if let Some(p) = &mtl_path {
-                warnings.push(format!(
+/// The MTL files `mtllib` statements name (each statement one file name with spaces, or several
+/// names), read in order, each once: their paths, their materials in order, and their texture
+/// statements (each with its MTL's path). A library not found is a warning (the materials it
+/// would give fall back to grey); one found by another name a leniency.
+type Libraries = (Vec<PathBuf>, Vec<MtlEntry>, Vec<(PathBuf, MapLine)>);
+
+fn read_libraries(obj: &Path, mtllib: &[String], notes: &mut Notes) -> Result<Libraries> {
+    let folder = obj.parent().unwrap_or(Path::new("."));
+    let (mut paths, mut entries, mut maps) = (Vec::<PathBuf>::new(), Vec::new(), Vec::new());
+    for statement in mtllib {
+        let names: Vec<String> = match files::find(folder, statement) {
+            Some(_) => vec![statement.clone()],
+            None => statement.split_whitespace().map(String::from).collect(),
+        };
+        for name in names {
+            let Some(Found { path, how }) = files::find(folder, &name) else {
+                notes.warnings.push(format!(
                     "{}: material library not found, using grey diffuse",
-                    p.display()
+                    folder.join(files::clean(&name)).display()
+                ));
+                continue;
+            };
+            if paths.contains(&path) {
+                continue;
+            }
+            if let Some(how) = how {
+                notes.lenient(obj, format!("mtllib {}: {how}", clip(&name)))?;
+            }
+            let text = read_text(&path)?;
+            let m = mtl::parse(&text).map_err(|message| Error::Mtl {
+                path: path.clone(),
+                message,
+            })?;
+            for n in &m.notes {
+                notes.lenient(&path, format!("skipped a malformed statement: {n}"))?;
+            }
+            if !m.skipped.is_empty() {
+                notes.warnings.push(format!(
+                    "{}: skipped statements vrpt does not use: {}",
+                    path.display(),
+                    kinds(&m.skipped)
                 ));
             }
-        }
-        Err(e) => {
-            return Err(Error::Mtl {
-                path: mtl_path.unwrap_or_else(|| path.to_path_buf()),
-                message: e.to_string(),
-            })
+            entries.extend(m.materials);
+            maps.extend(m.maps.into_iter().map(|l| (path.clone(), l)));
+            paths.push(path);
         }
     }
-    Ok(mats)
+    Ok((paths, entries, maps))
 }
 
-/// Warn once per name used by `usemtl` in the OBJ `text` that no material in `mats` has.
-fn warn_unknown_materials(path: &Path, text: &str, mats: &[Material], warnings: &mut Vec<String>) {
-    let known: BTreeSet<&str> = mats.iter().map(|m| m.name.as_str()).collect();
-    let unknown: BTreeSet<&str> = text
-        .lines()
-        .filter_map(|l| l.trim().strip_prefix("usemtl "))
-        .map(str::trim)
-        .filter(|n| !known.contains(n))
+/// Whether a block of `illum` 4, 6, 7 or 9 lets light through: a transmission filter `Tf`
+/// below 1 in some channel (3ds Max's and the Cornell box files' convention, where `Tf` is
+/// 1 − transmission and opaque materials say `Tf 1 1 1`), or a dissolve `d` below 1. Exporters
+/// write `illum 7` on every material of some scenes (Cinema 4D): those stay opaque.
+fn lets_light_through(e: &MtlEntry) -> bool {
+    e.tf.is_some_and(|t| t.min_element() < 1.0) || e.d.is_some_and(|d| d < 1.0)
+}
+
+/// vrpt's material for an MTL block (module doc), and what to say of it: a material scaled to
+/// conserve energy, a dissolve that is not rendered, a glass's `Kd` that is not used, an
+/// `illum` that asks for glass of an opaque material.
+pub fn material_of(e: &MtlEntry) -> (Material, Vec<String>) {
+    let name = clip(&e.name).into_owned();
+    let mut said = Vec::new();
+    let ke = e.ke.unwrap_or(Vec3::ZERO);
+    let illum = e.illum.unwrap_or(2);
+    let glassy = matches!(illum, 4 | 6 | 7 | 9);
+    let specular = match illum {
+        3 | 5 => Some(Specular::Mirror {
+            reflectance: e.ks.unwrap_or(Vec3::ONE),
+            schlick: illum == 5,
+        }),
+        _ if glassy && lets_light_through(e) => {
+            let ior = e.ni.filter(|&n| n > 1.0).unwrap_or(1.5);
+            // Tf as 1 − transmission (see lets_light_through); glass by dissolve alone is clear
+            let transmittance =
+                e.tf.filter(|t| t.min_element() < 1.0)
+                    .map_or(Vec3::ONE, |t| (Vec3::ONE - t).clamp(Vec3::ZERO, Vec3::ONE));
+            Some(Specular::Dielectric { ior, transmittance })
+        }
+        _ => None,
+    };
+    if glassy && specular.is_none() {
+        said.push(format!(
+            "material '{name}': illum {illum} without a transparency (Tf below 1 or d below 1) \
+             is rendered opaque"
+        ));
+    }
+    let kd_default = if ke.max_element() > 0.0 { 0.0 } else { 0.5 };
+    if let Some(s) = specular {
+        let kd = match s {
+            Specular::Mirror { .. } => e.kd.unwrap_or(Vec3::ZERO),
+            Specular::Dielectric { .. } => {
+                if e.kd.is_some_and(|k| k.max_element() > 0.0) {
+                    said.push(format!("material '{name}': glass: its Kd is not used"));
+                }
+                Vec3::ZERO
+            }
+        };
+        let (m, scaled) = Material::with_delta(&e.name, kd, s, ke);
+        if scaled {
+            said.push(format!(
+                "material '{name}': Kd + Ks > 1, scaled down to conserve energy"
+            ));
+        }
+        return (m, said);
+    }
+    if e.d.is_some_and(|d| d < 1.0) {
+        said.push(format!(
+            "material '{name}': dissolve (d or Tr) is not rendered: the surface is opaque"
+        ));
+    }
+    let (m, scaled) = Material::new(
+        &e.name,
+        e.kd.unwrap_or(Vec3::splat(kd_default)),
+        e.ks.unwrap_or(Vec3::ZERO),
+        e.ns.unwrap_or(1.0),
+        ke,
+    );
+    if scaled {
+        said.push(format!(
+            "material '{name}': Kd + Ks > 1, scaled down to conserve energy"
+        ));
+    }
+    (m, said)
+}
+
+/// Each `usemtl` name's material index (the last material of that name: a later definition
+/// wins), or `fallback` = `materials.len()` (grey) for a name no library defines, with a warning
+/// per such name.
+fn material_ids(
+    path: &Path,
+    obj: &objparse::ObjText,
+    materials: &[Material],
+    warnings: &mut Vec<String>,
+) -> Vec<u32> {
+    let fallback = materials.len() as u32;
+    let known: BTreeMap<&str, u32> = materials
+        .iter()
+        .enumerate()
+        .map(|(i, m)| (m.name.as_str(), i as u32))
         .collect();
-    for n in &unknown {
+    let mut unknown = BTreeSet::new();
+    let ids = obj
+        .material_names
+        .iter()
+        .map(|n| {
+            known.get(n.as_str()).copied().unwrap_or_else(|| {
+                unknown.insert(n.as_str());
+                fallback
+            })
+        })
+        .collect();
+    for n in unknown {
         warnings.push(format!(
             "{}: material '{}' is not defined, using grey diffuse",
             path.display(),
             clip(n)
         ));
     }
+    ids
 }
 
-/// Push the triangles of one tobj mesh, all of `material`, onto `triangles`, with their vertex
-/// normals (where all three are finite and non-zero) and texture coordinates where the mesh has
-/// them. Returns how many zero-area triangles it skipped; an error for a non-finite position.
-fn mesh_triangles(
-    path: &Path,
-    mesh: &tobj::Mesh,
-    material: u32,
-    triangles: &mut Vec<MeshTriangle>,
-) -> Result<usize> {
+/// The triangles of `obj`, each with its material (`ids` by `usemtl` name; `fallback` before
+/// any), vertex normals and texture coordinates where all three corners have them; zero-area
+/// triangles skipped and counted.
+fn triangles(
+    obj: &objparse::ObjText,
+    ids: &[u32],
+    fallback: u32,
+) -> Result<(Vec<MeshTriangle>, usize)> {
+    let mut out = Vec::with_capacity(obj.triangles.len());
     let mut degenerate = 0usize;
-    let pos = |i: u32| {
-        let i = i as usize * 3;
-        Vec3::new(
-            mesh.positions[i],
-            mesh.positions[i + 1],
-            mesh.positions[i + 2],
-        )
+    let normal = |c: &Corner| {
+        (c.vn != NONE)
+            .then(|| obj.normals[c.vn as usize])
+            .filter(|n| n.length_squared() > 0.0)
     };
-    let has_normals = mesh.normals.len() == mesh.positions.len();
-    let has_uvs =
-        !mesh.texcoords.is_empty() && mesh.texcoords.len() / 2 == mesh.positions.len() / 3;
-    let uv = |i: u32| {
-        let i = i as usize * 2;
-        Vec2::new(mesh.texcoords[i], mesh.texcoords[i + 1])
-    };
-    let nrm = |i: u32| {
-        let i = i as usize * 3;
-        Vec3::new(mesh.normals[i], mesh.normals[i + 1], mesh.normals[i + 2])
-    };
-    for f in mesh.indices.chunks_exact(3) {
-        let p = [pos(f[0]), pos(f[1]), pos(f[2])];
-        if !p.iter().all(|v| v.is_finite()) {
-            return Err(Error::Obj {
-                path: path.to_path_buf(),
-                message: "a vertex position is not a finite number".into(),
-            });
-        }
+    for (t, m) in obj.triangles.iter().zip(&obj.material) {
+        let p = t.map(|c| obj.positions[c.v as usize]);
         if (p[1] - p[0]).cross(p[2] - p[0]).length_squared() == 0.0 {
             degenerate += 1;
             continue;
         }
-        let normals = if has_normals {
-            let n = [nrm(f[0]), nrm(f[1]), nrm(f[2])];
-            n.iter()
-                .all(|v| v.is_finite() && v.length_squared() > 0.0)
-                .then_some(n)
-        } else {
-            None
+        let n = t.map(|c| normal(&c));
+        let normals = match n {
+            [Some(a), Some(b), Some(c)] => Some([a, b, c]),
+            _ => None,
         };
-        let uvs = has_uvs.then(|| [uv(f[0]), uv(f[1]), uv(f[2])]);
-        triangles.push(MeshTriangle {
+        let uvs = t
+            .iter()
+            .all(|c| c.vt != NONE)
+            .then(|| t.map(|c| obj.texcoords[c.vt as usize]));
+        out.push(MeshTriangle {
             p,
             normals,
             uvs,
-            material,
+            material: m.map_or(fallback, |k| ids[k as usize]),
         });
     }
-    Ok(degenerate)
-}
-
-fn convert_material(m: &tobj::Material) -> (Material, bool) {
-    let v = |a: Option<[f32; 3]>, d: f32| a.map_or(Vec3::splat(d), Vec3::from_array);
-    let ke = v(m.emissive, 0.0);
-    let kd_default = if ke.max_element() > 0.0 { 0.0 } else { 0.5 };
-    Material::new(
-        &m.name,
-        v(m.diffuse, kd_default),
-        v(m.specular, 0.0),
-        m.shininess.unwrap_or(1.0),
-        ke,
-    )
-}
-
-/// The path of the first `mtllib` of the OBJ, relative to its folder.
-fn mtllib_path(obj: &Path, text: &str) -> Option<PathBuf> {
-    let name = text
-        .lines()
-        .find_map(|l| l.trim().strip_prefix("mtllib "))?
-        .trim();
-    Some(obj.parent().unwrap_or(Path::new(".")).join(name))
-}
-
-/// Check every line of an OBJ before tobj reads it, so an error names its line: the numbers of
-/// `v`, `vt`, `vn` parse, are finite and (positions) at most [`MAX_MAGNITUDE`]; the indices of
-/// `f`, `l` and `p` (positions, texture coordinates and normals, 1-based or negative relative)
-/// point at elements defined before them, whether or not vrpt uses that attribute.
-pub fn check_obj_text(text: &str) -> std::result::Result<(), String> {
-    let mut counts = [0usize; 3]; // v, vt, vn
-    for (no, line) in text.lines().enumerate() {
-        let mut words = line.split_whitespace();
-        let Some(tag) = words.next() else { continue };
-        let at = |what: String| format!("line {}: {what}: '{}'", no + 1, clip(line.trim()));
-        let floats = |min: usize, max: usize| -> std::result::Result<Vec<f32>, String> {
-            let rest: Vec<&str> = line.split_whitespace().skip(1).collect();
-            if rest.len() < min || rest.len() > max {
-                let n = if min == max {
-                    min.to_string()
-                } else {
-                    format!("{min} to {max}")
-                };
-                return Err(at(format!("{tag} needs {n} numbers, found {}", rest.len())));
-            }
-            rest.iter()
-                .map(|w| match w.parse::<f32>() {
-                    Ok(x) if x.is_finite() => Ok(x),
-                    Ok(_) => Err(at(format!("{tag}: '{}' is not a finite number", clip(w)))),
-                    Err(_) => Err(at(format!("{tag}: '{}' is not a number", clip(w)))),
-                })
-                .collect()
-        };
-        match tag {
-            "v" => {
-                let x = floats(3, 6)?;
-                let p = match x.len() {
-                    3 | 6 => [x[0], x[1], x[2]],
-                    4 if x[3] != 0.0 => [x[0] / x[3], x[1] / x[3], x[2] / x[3]],
-                    4 => return Err(at("v: the weight w is 0".into())),
-                    _ => {
-                        return Err(at(
-                            "v needs 3, 4 (x y z w) or 6 (x y z r g b) numbers".into()
-                        ))
-                    }
-                };
-                if p.iter().any(|c| c.abs() > MAX_MAGNITUDE) {
-                    return Err(at(format!("v: a coordinate is beyond ±{MAX_MAGNITUDE:e}")));
-                }
-                counts[0] += 1;
-            }
-            "vt" => {
-                floats(2, 3)?;
-                counts[1] += 1;
-            }
-            "vn" => {
-                floats(3, 3)?;
-                counts[2] += 1;
-            }
-            "f" | "l" | "p" => {
-                let min = match tag {
-                    "f" => 3,
-                    "l" => 2,
-                    _ => 1,
-                };
-                let refs: Vec<&str> = words.collect();
-                if refs.len() < min {
-                    return Err(at(format!("{tag} needs at least {min} vertices")));
-                }
-                for r in refs {
-                    check_vertex_ref(r, &counts).map_err(&at)?;
-                }
-            }
-            _ => {}
-        }
-    }
-    Ok(())
-}
-
-/// One vertex of a face, line or point: `v`, `v/vt`, `v//vn` or `v/vt/vn`.
-fn check_vertex_ref(r: &str, counts: &[usize; 3]) -> std::result::Result<(), String> {
-    const WHAT: [&str; 3] = ["position", "texture coordinate", "normal"];
-    let parts: Vec<&str> = r.split('/').collect();
-    if parts.len() > 3 {
-        return Err(format!("'{}' is not a vertex reference", clip(r)));
-    }
-    for (k, idx) in parts.iter().enumerate() {
-        if idx.is_empty() {
-            if k == 0 || (k == 1 && parts.len() == 2) {
-                return Err(format!("'{}' is not a vertex reference", clip(r)));
-            }
-            continue;
-        }
-        let n = counts[k] as i64;
-        let i: i64 = idx
-            .parse()
-            .map_err(|_| format!("'{}' is not an index", clip(idx)))?;
-        if i == 0 || i > n || -i > n {
-            return Err(format!(
-                "{} index {} is out of range ({n} defined before this line)",
-                WHAT[k],
-                clip(idx)
-            ));
-        }
-    }
-    Ok(())
-}
-
-/// Check the numbers of an MTL file by line: colours (`Ka`, `Kd`, `Ks`, `Ke`, `Tf`) three numbers
-/// (tobj reads three and panics on fewer), finite, non-negative and at most [`MAX_MAGNITUDE`]; `Ns` in `[0, 1e6]`; `Ni`, `d`, `Tr` finite.
-pub fn check_mtl_text(text: &str) -> std::result::Result<(), String> {
-    for (no, line) in text.lines().enumerate() {
-        let mut words = line.split_whitespace();
-        let Some(tag) = words.next() else { continue };
-        let at = |what: String| format!("line {}: {what}: '{}'", no + 1, clip(line.trim()));
-        let (lo, hi) = match tag {
-            "Ka" | "Kd" | "Ks" | "Ke" | "Tf" => (0.0, MAX_MAGNITUDE),
-            "Ns" => (0.0, 1e6),
-            "Ni" | "d" | "Tr" => (f32::MIN, f32::MAX),
-            _ => continue,
-        };
-        let rest: Vec<&str> = words.collect();
-        // `Kd spectral file.rfl` and `Kd xyz x y z` name other forms; vrpt reads RGB only, so
-        // only plain numbers are checked
-        if rest
-            .first()
-            .is_some_and(|w| w.eq_ignore_ascii_case("spectral") || w.eq_ignore_ascii_case("xyz"))
-        {
-            continue;
-        }
-        let colour = lo == 0.0 && hi == MAX_MAGNITUDE;
-        if colour && rest.len() != 3 {
-            return Err(at(format!(
-                "{tag} needs 3 numbers (r g b), found {}",
-                rest.len()
-            )));
-        }
-        if rest.is_empty() {
-            return Err(at(format!("{tag} has no value")));
-        }
-        for w in rest {
-            let x: f32 = w
-                .parse()
-                .map_err(|_| at(format!("{tag}: '{}' is not a number", clip(w))))?;
-            if !x.is_finite() {
-                return Err(at(format!("{tag}: '{}' is not a finite number", clip(w))));
-            }
-            if !(lo..=hi).contains(&x) {
-                return Err(at(format!("{tag}: {x} is outside [{lo}, {hi:e}]")));
-            }
-        }
-    }
-    Ok(())
+    Ok((out, degenerate))
 }
 
 /// Load the textures of `lines` (each with its MTL) once per file and decoding, and give each
 /// material its maps (by name: a statement under `newmtl X` belongs to the material X). A file
-/// that cannot be read is one error naming the MTL and the statement's line.
-fn attach_maps(mats: &mut [Material], lines: &[(PathBuf, MapLine)]) -> Result<TextureSet> {
+/// that cannot be found or read is a leniency naming the MTL and the statement's line: the
+/// material keeps its constant colour.
+fn attach_maps(
+    mats: &mut [Material],
+    lines: &[(PathBuf, MapLine)],
+    notes: &mut Notes,
+) -> Result<TextureSet> {
     let mut set = TextureSet::default();
     for (mtl, m) in lines {
-        let Some(mat) = mats.iter_mut().find(|x| x.name == m.material) else {
+        let Some(mat) = mats.iter_mut().rev().find(|x| x.name == m.material) else {
             continue;
         };
         let decode = match m.key.as_str() {
             "map_kd" | "map_ks" => Decode::Srgb,
             _ => Decode::Linear,
         };
-        let file = mtl.parent().unwrap_or(Path::new(".")).join(&m.file);
-        let index = set.load(&file, decode).map_err(|e| Error::Mtl {
-            path: mtl.clone(),
-            message: format!("line {}: {}: {e}", m.line, m.tag),
-        })?;
+        let at = format!("line {}: {} {}", m.line, m.tag, clip(&m.file));
+        let folder = mtl.parent().unwrap_or(Path::new("."));
+        let Some(found) = files::find(folder, &m.file) else {
+            notes.lenient(
+                mtl,
+                format!("{at}: file not found, the material's constant colour is used"),
+            )?;
+            continue;
+        };
+        if let Some(how) = &found.how {
+            notes.lenient(mtl, format!("{at}: {how}"))?;
+        }
+        let index = match set.load(&found.path, decode) {
+            Ok(i) => i,
+            Err(e) => {
+                notes.lenient(
+                    mtl,
+                    format!("{at}: {e}; the material's constant colour is used"),
+                )?;
+                continue;
+            }
+        };
         let r = TextureRef {
             index,
             scale: m.scale,
@@ -456,143 +437,80 @@ fn attach_maps(mats: &mut [Material], lines: &[(PathBuf, MapLine)]) -> Result<Te
     Ok(set)
 }
 
-/// One texture statement of an MTL (`map_Kd`, `map_Ks`, `map_Ns`, `map_d`, `bump`,
-/// `map_Bump`, `norm`): its material, keyword (lower case), file (relative to the MTL) and
-/// options, and its line.
-#[derive(Clone, Debug, PartialEq)]
-pub struct MapLine {
-    pub material: String,
-    /// The keyword as written, and in lower case.
-    pub tag: String,
-    pub key: String,
-    pub file: String,
-    /// `-s u v`: scale of the texture coordinates (default 1).
-    pub scale: Vec2,
-    /// `-o u v`: offset of the texture coordinates (default 0).
-    pub offset: Vec2,
-    /// `-bm m`: the bump multiplier (default 1).
-    pub bump_mult: f32,
-    /// Its line in the MTL, from 1.
-    pub line: usize,
-}
+#[cfg(test)]
+mod tests {
+    use super::*;
 
-/// The texture keywords vrpt reads.
-const MAP_KEYS: [&str; 7] = [
-    "map_kd", "map_ks", "map_ns", "map_d", "bump", "map_bump", "norm",
-];
-
-/// How many values each option of a texture statement takes (the MTL format's options; `-s`,
-/// `-o` and `-t` take up to three numbers, read while they are numbers).
-fn option_arity(opt: &str) -> Option<usize> {
-    Some(match opt {
-        "-blendu" | "-blendv" | "-cc" | "-clamp" | "-imfchan" | "-type" | "-boost" | "-texres"
-        | "-bm" => 1,
-        "-mm" => 2,
-        "-s" | "-o" | "-t" => 3,
-        _ => return None,
-    })
-}
-
-/// The texture statements of an MTL text. Options other than `-s`, `-o` and `-bm` are skipped,
-/// each named once in `ignored`; other texture keywords (`map_Ka`, `disp`, `refl`, …) are
-/// named there too. Err (one line, with the line number) for a statement without a file or a
-/// malformed number.
-pub fn parse_maps(
-    text: &str,
-    ignored: &mut BTreeSet<String>,
-) -> std::result::Result<Vec<MapLine>, String> {
-    let mut out = Vec::new();
-    let mut material = String::new();
-    for (no, line) in text.lines().enumerate() {
-        let mut words = line.split_whitespace();
-        let Some(tag) = words.next() else { continue };
-        if tag == "newmtl" {
-            material = words.collect::<Vec<_>>().join(" ");
-            continue;
-        }
-        let key = tag.to_ascii_lowercase();
-        if !MAP_KEYS.contains(&key.as_str()) {
-            if key.starts_with("map_") || ["disp", "decal", "refl"].contains(&key.as_str()) {
-                ignored.insert(tag.to_string());
-            }
-            continue;
-        }
-        let rest: Vec<&str> = words.collect();
-        let mut m = MapLine {
-            material: material.clone(),
-            tag: tag.to_string(),
-            key,
-            file: String::new(),
-            scale: Vec2::ONE,
-            offset: Vec2::ZERO,
-            bump_mult: 1.0,
-            line: no + 1,
-        };
-        let k = parse_map_options(&rest, &mut m, ignored)?;
-        m.file = rest[k..].join(" ");
-        if m.file.is_empty() {
-            return Err(format!("line {}: {tag}: no file named", no + 1));
-        }
-        out.push(m);
-    }
-    Ok(out)
-}
-
-/// Read the options at the start of the words `rest` after a texture keyword into `m` (`-s`,
-/// `-o`, `-bm`; others named in `ignored`). Returns the index of the first word of the file name.
-fn parse_map_options(
-    rest: &[&str],
-    m: &mut MapLine,
-    ignored: &mut BTreeSet<String>,
-) -> std::result::Result<usize, String> {
-    let (line, tag) = (m.line, m.tag.clone());
-    let at = |what: String| format!("line {line}: {tag}: {what}");
-    let number = |w: &str| -> std::result::Result<f32, String> {
-        match w.parse::<f32>() {
-            Ok(x) if x.is_finite() => Ok(x),
-            _ => Err(at(format!("'{}' is not a finite number", clip(w)))),
-        }
-    };
-    let mut k = 0;
-    while k < rest.len() && rest[k].starts_with('-') && rest[k].parse::<f32>().is_err() {
-        let opt = rest[k];
-        k += 1;
-        let Some(arity) = option_arity(opt) else {
-            ignored.insert(opt.to_string());
-            // an unknown option: skip the numbers after it
-            while k < rest.len() && rest[k].parse::<f32>().is_ok() {
-                k += 1;
-            }
-            continue;
-        };
-        let numeric = matches!(opt, "-s" | "-o" | "-t" | "-mm" | "-bm" | "-boost");
-        let mut values = Vec::new();
-        while values.len() < arity && k < rest.len() {
-            if numeric && rest[k].parse::<f32>().is_err() {
-                break;
-            }
-            values.push(rest[k]);
-            k += 1;
-        }
-        if values.is_empty() {
-            return Err(at(format!("{opt} needs a value")));
-        }
-        match opt {
-            "-s" | "-o" => {
-                let default = if opt == "-s" { 1.0 } else { 0.0 };
-                let u = number(values[0])?;
-                let v = values.get(1).map_or(Ok(default), |w| number(w))?;
-                if opt == "-s" {
-                    m.scale = Vec2::new(u, v);
-                } else {
-                    m.offset = Vec2::new(u, v);
-                }
-            }
-            "-bm" => m.bump_mult = number(values[0])?,
-            _ => {
-                ignored.insert(opt.to_string());
-            }
+    fn entry(illum: u32) -> MtlEntry {
+        MtlEntry {
+            name: "m".into(),
+            kd: Some(Vec3::ZERO),
+            ks: Some(Vec3::splat(0.9)),
+            ni: Some(1.33),
+            tf: Some(Vec3::new(0.1, 0.0, 0.2)),
+            illum: Some(illum),
+            ..MtlEntry::default()
         }
     }
-    Ok(k)
+
+    /// `illum` maps to the lobes the MTL spec and the common exporters mean.
+    #[test]
+    fn illum_chooses_the_lobe() {
+        let mirror = |schlick| Specular::Mirror {
+            reflectance: Vec3::splat(0.9),
+            schlick,
+        };
+        let glass = Specular::Dielectric {
+            ior: 1.33,
+            transmittance: Vec3::new(0.9, 1.0, 0.8),
+        };
+        for (illum, want) in [
+            (3, Some(mirror(false))),
+            (5, Some(mirror(true))),
+            (4, Some(glass)),
+            (7, Some(glass)),
+            (9, Some(glass)),
+            (2, None),
+            (1, None),
+        ] {
+            let (m, _) = material_of(&entry(illum));
+            assert_eq!(m.specular, want, "illum {illum}");
+            assert_eq!(m.delta_share, if want.is_some() { 1.0 } else { 0.0 });
+        }
+        // glass without Ni is 1.5; without a transparency, illum 7 is opaque (and said so)
+        let e = MtlEntry {
+            ni: None,
+            ..entry(4)
+        };
+        assert!(matches!(
+            material_of(&e).0.specular,
+            Some(Specular::Dielectric { ior, .. }) if ior == 1.5
+        ));
+        let e = MtlEntry {
+            tf: Some(Vec3::ONE),
+            ..entry(7)
+        };
+        let (m, said) = material_of(&e);
+        assert!(
+            m.specular.is_none() && said[0].contains("opaque"),
+            "{said:?}"
+        );
+        // a mirror over a diffuse part shares the bounces by albedo
+        let e = MtlEntry {
+            kd: Some(Vec3::splat(0.3)),
+            ks: Some(Vec3::splat(0.6)),
+            ..entry(3)
+        };
+        let (m, _) = material_of(&e);
+        assert!((m.delta_share - 2.0 / 3.0).abs() < 1e-6);
+        assert_eq!(m.kd(), Vec3::splat(0.3));
+        // a Phong material keeps a Ks near 1 and a high Ns
+        let e = MtlEntry {
+            ks: Some(Vec3::splat(0.99)),
+            ns: Some(1000.0),
+            ..entry(2)
+        };
+        let (m, _) = material_of(&e);
+        assert_eq!((m.ks(), m.exponent()), (Vec3::splat(0.99), 1000.0));
+    }
 }

@@ -15,6 +15,7 @@ mod experiments;
 mod guiding;
 mod hostile_inputs;
 mod light_sampling;
+mod real_scenes;
 mod render_core;
 mod report_browser;
 mod scale_out;

@@ -25,6 +25,13 @@
 //!   contributed zero. So it stays unbiased.
 //! - `guided`: the BSDF's part of path guiding is `phong`; the integrator mixes it with the
 //!   learned guide ([`crate::guiding`]), so here `guided` samples and evaluates as `phong`.
+//!
+//! Mirrors and glass are delta lobes, in [`specular`]: a surface has either the Phong lobes or
+//! one delta lobe, and the path loop asks only which.
+
+mod specular;
+
+pub use specular::{fresnel_dielectric, fresnel_schlick, Specular, SpecularSample};
 
 use crate::math::{average, reflect_local, Frame};
 use crate::sampling::{

@@ -1,0 +1,205 @@
+//! A scene without a description still gives a picture a person recognises: where the camera
+//! stands, and whether the scene's own emitters light what it sees.
+//!
+//! **A survey** of a camera ([`survey`]): a 24×24 grid of primary rays (each jittered by a hash
+//! of its pixel, so the result is a function of the scene alone). For each it records whether
+//! the ray hits something, and whether it hits the front of the surface (the side its winding's
+//! normal points to: models are made to be seen from there); at the point it hits, the direct
+//! light of the emitters, estimated by four points on emitters (chosen in proportion to power,
+//! each uniform on its emitter) and shadow rays: `L ≈ ρ/π · Σ Le cosθ cosθ' / (d² p)` with an
+//! albedo `ρ = ½`, and `Le` itself where the ray hits an emitter's front. The mean of `L` over
+//! the grid is the brightness of the picture to come, before any bounce.
+//!
+//! **The camera** ([`choose_camera`]): the view of the bounding box from +z (the default since
+//! the first scenes) unless at most half of what it hits is the front of a surface (the outside
+//! of a room whose normals point in: the picture would be the backs of its walls). Then the
+//! camera goes inside: near one end of the box's longer horizontal axis, at 40 % of its height,
+//! looking along that axis (both ends of both horizontal axes are tried; the view with the
+//! largest share of front faces among all rays wins).
+//!
+//! **The light** ([`too_dark`]): a scene whose emitters give the chosen view a mean direct
+//! brightness below [`DARK`] (an outdoor world whose only emitter is a small dim lamp, emitters
+//! hidden from everything the camera sees) is lit as a scene without emitters is, by a uniform
+//! white environment, and the loader says so.
+
+use super::TriShading;
+use crate::accel::{Accel, TraceStack};
+use crate::camera::{Camera, CameraDesc};
+use crate::lights::{luminance, Emitter, Shape};
+use crate::math::{hash_words, u64_to_unit_f32};
+use glam::{UVec2, Vec2, Vec3};
+use std::f32::consts::FRAC_1_PI;
+
+/// The survey's grid side, in rays.
+const GRID: u32 = 24;
+
+/// Points on emitters per surveyed hit.
+const LIGHT_SAMPLES: u32 = 4;
+
+/// The mean direct brightness (radiance, albedo ½) below which a scene's emitters are taken to
+/// light nothing the camera sees: a thousandth of what a white sky gives the same surfaces.
+pub const DARK: f32 = 5e-4;
+
+/// What a camera sees of a scene (see the module doc).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Survey {
+    /// The share of rays that hit anything.
+    pub hits: f32,
+    /// The share of rays that hit the front of a surface.
+    pub front: f32,
+    /// The mean direct brightness over all rays.
+    pub direct: f32,
+}
+
+/// The scene's geometry as the survey reads it.
+pub struct Geometry<'a> {
+    pub accel: &'a Accel,
+    pub shading: &'a [TriShading],
+    /// The emissive triangles, in the order of their BVH-order primitives.
+    pub emitters: &'a [Emitter],
+    /// The scene's ray offset.
+    pub epsilon: f32,
+}
+
+/// A number in `[0, 1)` from the hash of `words`.
+fn unit(words: &[u64]) -> f32 {
+    u64_to_unit_f32(hash_words(words))
+}
+
+/// A point uniform on emitter `e` from `u`.
+fn point_on(e: &Emitter, u: Vec2) -> Vec3 {
+    match e.shape {
+        Shape::Triangle([a, b, c]) => {
+            let s = u.x.sqrt();
+            a * (1.0 - s) + b * (s * (1.0 - u.y)) + c * (s * u.y)
+        }
+        Shape::Rectangle { s, ex, ey } => s + ex * u.x + ey * u.y,
+    }
+}
+
+/// Survey the view of `desc` (module doc).
+pub fn survey(g: &Geometry, desc: &CameraDesc) -> Survey {
+    let Some(camera) = Camera::new(desc, GRID, GRID) else {
+        return Survey::default();
+    };
+    // the emitters' power, summed in order (a choice by power is a binary search)
+    let mut cdf: Vec<f32> = g.emitters.iter().map(|e| e.power()).collect();
+    let mut total = 0.0f32;
+    for c in cdf.iter_mut() {
+        total += *c;
+        *c = total;
+    }
+    let mut stack = TraceStack::default();
+    let (mut hits, mut front, mut direct) = (0u32, 0u32, 0.0f64);
+    for y in 0..GRID {
+        for x in 0..GRID {
+            let k = (y * GRID + x) as u64;
+            let u = Vec2::new(unit(&[k, 1]), unit(&[k, 2]));
+            let (o, d) = camera.generate_ray(UVec2::new(x, y), u);
+            let Some(hit) = g.accel.intersect_with(&mut stack, o, d, f32::INFINITY) else {
+                continue;
+            };
+            hits += 1;
+            let sh = &g.shading[hit.prim as usize];
+            let faces = sh.ng.dot(-d) > 0.0;
+            front += faces as u32;
+            let p = o + d * hit.t;
+            let n = if faces { sh.ng } else { -sh.ng };
+            direct += light_at(g, (p, n, hit.prim), &cdf, k, &mut stack) as f64;
+        }
+    }
+    let n = (GRID * GRID) as f32;
+    Survey {
+        hits: hits as f32 / n,
+        front: front as f32 / n,
+        direct: direct as f32 / n,
+    }
+}
+
+/// The direct brightness at point `p` (normal `n` on the viewer's side) of BVH-order triangle
+/// `prim` (the emitter's `Le` where it is one seen from the front), from [`LIGHT_SAMPLES`] points
+/// on emitters chosen by power (`cdf`: the powers summed in order); `k` keys their numbers.
+fn light_at(
+    g: &Geometry,
+    (p, n, prim): (Vec3, Vec3, u32),
+    cdf: &[f32],
+    k: u64,
+    stack: &mut TraceStack,
+) -> f32 {
+    // the emitters are in the order of their primitives
+    if let Ok(i) = g.emitters.binary_search_by_key(&prim, |e| e.prims[0]) {
+        let e = &g.emitters[i];
+        if e.n.dot(n) > 0.0 {
+            return luminance(e.emission);
+        }
+    }
+    let total = cdf.last().copied().unwrap_or(0.0);
+    if total.is_nan() || total <= 0.0 {
+        return 0.0;
+    }
+    let mut sum = 0.0;
+    for j in 0..LIGHT_SAMPLES as u64 {
+        // an emitter by power, then a point on it
+        let pick = unit(&[k, 3, j]) * total;
+        let i = cdf.partition_point(|&c| c <= pick).min(cdf.len() - 1);
+        let power = cdf[i] - if i > 0 { cdf[i - 1] } else { 0.0 };
+        let e = &g.emitters[i];
+        let y = point_on(e, Vec2::new(unit(&[k, 4, j]), unit(&[k, 5, j])));
+        let to = y - p;
+        let d2 = to.length_squared();
+        let w = to / d2.sqrt();
+        let (cos, cos_e) = (n.dot(w), -e.n.dot(w));
+        if cos <= 0.0 || cos_e <= 0.0 || d2 <= 0.0 {
+            continue;
+        }
+        let origin = p + n * g.epsilon;
+        let tmax = (y - origin).length() - 2.0 * g.epsilon;
+        if g.accel.occluded_with(stack, origin, w, tmax) {
+            continue;
+        }
+        let pdf_area = power / total / e.area;
+        sum += luminance(e.emission) * cos * cos_e / (d2 * pdf_area);
+    }
+    0.5 * FRAC_1_PI * sum / LIGHT_SAMPLES as f32
+}
+
+/// The camera of a scene without a description, looking at the box `(lo, hi)`: `outside` (the
+/// default view) unless at most half its rays hit a front face, then the inside view with the
+/// largest share of front faces (module doc). Also the chosen view's survey.
+pub fn choose_camera(
+    g: &Geometry,
+    (lo, hi): (Vec3, Vec3),
+    outside: CameraDesc,
+) -> (CameraDesc, Survey) {
+    let first = survey(g, &outside);
+    if first.front > 0.5 * first.hits {
+        return (outside, first);
+    }
+    let (centre, ext) = (0.5 * (lo + hi), hi - lo);
+    let eye_y = lo.y + 0.4 * ext.y;
+    let mut best = (outside, first);
+    for (axis, length) in [(Vec3::X, ext.x), (Vec3::Z, ext.z)] {
+        for sign in [1.0f32, -1.0] {
+            let dir = axis * sign;
+            let mut eye = centre - dir * (0.4 * length);
+            eye.y = eye_y;
+            let desc = CameraDesc {
+                eye,
+                target: eye + dir,
+                up: Vec3::Y,
+                fov_deg: 60.0,
+            };
+            let s = survey(g, &desc);
+            if s.front > best.1.front {
+                best = (desc, s);
+            }
+        }
+    }
+    best
+}
+
+/// Whether the scene's emitters light the view of `s` too little to make a picture (a mean
+/// direct brightness below [`DARK`]).
+pub fn too_dark(s: &Survey) -> bool {
+    s.direct < DARK
+}
