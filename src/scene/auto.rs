@@ -11,11 +11,14 @@
 //! the grid is the brightness of the picture to come, before any bounce.
 //!
 //! **The camera** ([`choose_camera`]): the view of the bounding box from +z (the default since
-//! the first scenes) unless at most half of what it hits is the front of a surface (the outside
-//! of a room whose normals point in: the picture would be the backs of its walls). Then the
-//! camera goes inside: near one end of the box's longer horizontal axis, at 40 % of its height,
-//! looking along that axis (both ends of both horizontal axes are tried; the view with the
-//! largest share of front faces among all rays wins).
+//! the first scenes), or from above at 35° where that sees almost nothing (a flat world seen
+//! edge-on), unless at most half of what it hits is the front of a surface: then the
+//! view from −z, +x or −x that sees most fronts (a Cornell box open toward −z). Where that still
+//! sees mostly backs and the scene has emitters (the outside of a room whose normals point in, lit from inside: the
+//! picture would be the backs of its walls, dark). Then the camera goes inside: near one end of
+//! a horizontal axis of the box, at 40 % of its height, looking along that axis (both ends of
+//! both horizontal axes are tried; the view of the brightest direct light wins, if it is
+//! brighter than the outside view's).
 //!
 //! **The light** ([`too_dark`]): a scene whose emitters give the chosen view a mean direct
 //! brightness below [`DARK`] (an outdoor world whose only emitter is a small dim lamp, emitters
@@ -164,15 +167,37 @@ fn light_at(
 }
 
 /// The camera of a scene without a description, looking at the box `(lo, hi)`: `outside` (the
-/// default view) unless at most half its rays hit a front face, then the inside view with the
-/// largest share of front faces (module doc). Also the chosen view's survey.
+/// default view) unless at most half its rays hit a front face and the scene has emitters (one
+/// without is lit from outside, by the white environment, and two-sided shading shows the backs
+/// of surfaces as well as their fronts); then the inside view whose direct light is brightest,
+/// if it is brighter than the outside's (module doc). Also the chosen view's survey.
 pub fn choose_camera(
     g: &Geometry,
     (lo, hi): (Vec3, Vec3),
     outside: CameraDesc,
 ) -> (CameraDesc, Survey) {
-    let first = survey(g, &outside);
-    if first.front > 0.5 * first.hits {
+    let mut first = (outside, survey(g, &outside));
+    if first.1.hits < 0.05 {
+        // a flat world seen edge-on (a terrain, a ground plane): from above, at 35°
+        let desc = frame_from(lo, hi, Vec3::new(0.0, 0.7, 1.0).normalize());
+        let s = survey(g, &desc);
+        if s.hits > first.1.hits {
+            first = (desc, s);
+        }
+    }
+    if first.1.front > 0.5 * first.1.hits {
+        return first;
+    }
+    // the other sides first: a Cornell box open toward -z is seen from there
+    for dir in [-Vec3::Z, Vec3::X, -Vec3::X] {
+        let desc = frame_from(lo, hi, dir);
+        let s = survey(g, &desc);
+        if s.front > first.1.front {
+            first = (desc, s);
+        }
+    }
+    let (outside, first) = first;
+    if first.front > 0.5 * first.hits || g.emitters.is_empty() {
         return (outside, first);
     }
     let (centre, ext) = (0.5 * (lo + hi), hi - lo);
@@ -190,12 +215,27 @@ pub fn choose_camera(
                 fov_deg: 60.0,
             };
             let s = survey(g, &desc);
-            if s.front > best.1.front {
+            if (s.direct, s.front) > (best.1.direct, best.1.front) {
                 best = (desc, s);
             }
         }
     }
     best
+}
+
+/// A camera looking at the box `(lo, hi)` from direction `dir` (a unit vector, not vertical),
+/// far enough back to see all of it at 40°.
+pub fn frame_from(lo: Vec3, hi: Vec3, dir: Vec3) -> CameraDesc {
+    let centre = 0.5 * (lo + hi);
+    let radius = (0.5 * (hi - lo).length()).max(1e-3);
+    let fov_deg = 40.0f32;
+    let dist = radius / (0.5 * fov_deg.to_radians()).sin();
+    CameraDesc {
+        eye: centre + dir * dist,
+        target: centre,
+        up: Vec3::Y,
+        fov_deg,
+    }
 }
 
 /// Whether the scene's emitters light the view of `s` too little to make a picture (a mean

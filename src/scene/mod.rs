@@ -158,10 +158,12 @@ impl Scene {
                 let outside = frame_bounds(lo, hi);
                 let (c, s) = auto::choose_camera(&g, (lo, hi), outside);
                 if c != outside {
+                    let inside = (lo.cmple(c.eye) & c.eye.cmple(hi)).all();
                     warnings.push(format!(
-                        "from outside the scene shows the backs of its surfaces: the camera is \
-                         placed inside, at {} looking toward {} (a [camera] in scene.toml \
-                         chooses another)",
+                        "the view from +z sees mostly the backs of surfaces, or almost nothing: \
+                         the camera is placed {}, at {} looking toward {} (a [camera] in \
+                         scene.toml chooses another)",
+                        if inside { "inside" } else { "outside" },
                         show(c.eye),
                         show(c.target)
                     ));
@@ -462,16 +464,7 @@ fn show(v: Vec3) -> String {
 
 /// A camera looking at the bounding box from +z, far enough back to see all of it at 40°.
 fn frame_bounds(lo: Vec3, hi: Vec3) -> CameraDesc {
-    let centre = 0.5 * (lo + hi);
-    let radius = (0.5 * (hi - lo).length()).max(1e-3);
-    let fov_deg = 40.0f32;
-    let dist = radius / (0.5 * fov_deg.to_radians()).sin();
-    CameraDesc {
-        eye: centre + Vec3::Z * dist,
-        target: centre,
-        up: Vec3::Y,
-        fov_deg,
-    }
+    auto::frame_from(lo, hi, Vec3::Z)
 }
 
 /// Load a scene from an `.obj` (with a `scene.toml` beside it that names it, if any), a
