@@ -1,4 +1,5 @@
-//! BVH build time and ray throughput (closest hit and occlusion; coherent camera rays and
+//! BVH build time, the load of an OBJ scene to its BVH (`load_obj`), and ray throughput
+//! (closest hit and occlusion; coherent camera rays and
 //! incoherent bounce-like rays) on generated terrains of 10³…10⁶ triangles, against a
 //! brute-force loop over all triangles at small sizes. Throughput is reported in elements/s =
 //! rays/s.
@@ -189,5 +190,56 @@ fn trace_cornell(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, build, trace, trace_cornell);
+/// A height field of `side`² quads (2·side² triangles) as OBJ text: shared vertices with
+/// normals, faces `f a//a b//b c//c d//d`, as a scanned mesh is written.
+fn grid_obj(side: usize) -> String {
+    use std::fmt::Write;
+    let h = |x: f32, z: f32| 0.1 * (7.0 * x).sin() * (5.0 * z).cos();
+    let mut s = String::from("mtllib none.mtl\n");
+    let n = side + 1;
+    for k in 0..n * n {
+        let (x, z) = ((k % n) as f32 / side as f32, (k / n) as f32 / side as f32);
+        writeln!(s, "v {x:.6} {:.6} {z:.6}", h(x, z)).unwrap();
+    }
+    for k in 0..n * n {
+        let (x, z) = ((k % n) as f32 / side as f32, (k / n) as f32 / side as f32);
+        let n = Vec3::new(
+            -0.7 * (7.0 * x).cos() * (5.0 * z).cos(),
+            1.0,
+            0.5 * (7.0 * x).sin() * (5.0 * z).sin(),
+        );
+        let n = n.normalize();
+        writeln!(s, "vn {:.5} {:.5} {:.5}", n.x, n.y, n.z).unwrap();
+    }
+    for z in 0..side {
+        for x in 0..side {
+            let i = z * n + x + 1;
+            let (a, b, c, d) = (i, i + 1, i + n + 1, i + n);
+            writeln!(s, "f {a}//{a} {d}//{d} {c}//{c} {b}//{b}").unwrap();
+        }
+    }
+    s
+}
+
+/// Loading a scene from its OBJ to its BVH (`scene::load`: parse, mesh, BVH, shading data), on
+/// height fields of 10⁵ and 10⁶ triangles written once to a temporary file.
+fn load(c: &mut Criterion) {
+    let mut g = c.benchmark_group("load_obj");
+    g.sample_size(10).warm_up_time(Duration::from_secs(1));
+    let dir = std::env::temp_dir().join(format!("vrpt-bench-load-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for side in [224, 708] {
+        let path = dir.join(format!("grid{side}.obj"));
+        std::fs::write(&path, grid_obj(side)).unwrap();
+        let tris = 2 * side * side;
+        g.throughput(Throughput::Elements(tris as u64));
+        g.bench_with_input(BenchmarkId::from_parameter(tris), &path, |b, p| {
+            b.iter(|| black_box(vrpt::scene::load(p).unwrap()))
+        });
+    }
+    g.finish();
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+criterion_group!(benches, build, load, trace, trace_cornell);
 criterion_main!(benches);

@@ -86,7 +86,7 @@ impl SceneInfo {
             "render defaults: {}x{}, {} spp, max depth {}\n",
             d.width, d.height, d.spp, d.max_depth
         );
-        let bytes = s.accel.memory_bytes() + std::mem::size_of_val(&s.shading[..]);
+        let bytes = s.memory_bytes().0 + s.memory_bytes().1;
         out += &format!(
             "memory: {:.1} MB for the BVH and shading data ({:.0} bytes per triangle), \
              {:.1} MB of texels\n",

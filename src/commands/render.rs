@@ -345,7 +345,7 @@ impl PreparedRender {
         let adaptive = adaptive_summary(&r, bar);
         Ok(RenderOutcome {
             summary: r.stats.summary(&self.scene, &settings) + &adaptive + &r.estimate.summary(),
-            timing: r.stats.timing(self.load_time, self.scene.accel.build_time),
+            timing: r.stats.timing(self.load_time, &self.scene),
             output: self.output,
             settings,
             stats: r.stats,

@@ -73,12 +73,22 @@ impl RenderStats {
     /// thread time, the share in BVH traversal and the rest (camera, sampler, surface and
     /// shading, light sampling, film), with the traversal's own ray rate per thread. The split
     /// needs [`RenderSettings::time_traces`]; without it only the totals are given.
-    pub fn timing(&self, load: Duration, build: Duration) -> String {
+    pub fn timing(&self, load: Duration, scene: &Scene) -> String {
         let thread = self.thread_time.as_secs_f64().max(1e-9);
+        let (bvh, shading) = scene.memory_bytes();
+        let n = scene.triangle_count().max(1) as f64;
         let mut s = format!(
+            "memory: {:.1} MB of geometry, {:.0} bytes per triangle (BVH and triangles {:.0}, \
+             shading data {:.0})\n",
+            (bvh + shading) as f64 / 1e6,
+            (bvh + shading) as f64 / n,
+            bvh as f64 / n,
+            shading as f64 / n
+        );
+        s += &format!(
             "time: scene load {:.1} ms (BVH build {:.1} ms), render {:.3} s = {:.3} thread-seconds",
             load.as_secs_f64() * 1e3,
-            build.as_secs_f64() * 1e3,
+            scene.accel.build_time.as_secs_f64() * 1e3,
             self.elapsed.as_secs_f64(),
             thread
         );

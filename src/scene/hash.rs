@@ -7,7 +7,7 @@ use crate::bsdf::Specular;
 use crate::camera::CameraDesc;
 use crate::environment::Environment;
 use crate::material::Material;
-use crate::math::hash_words;
+use crate::math::WordHash;
 use crate::texture::TextureSet;
 use glam::Vec3;
 
@@ -18,12 +18,14 @@ pub(super) fn content_hash(
     camera: &CameraDesc,
     env: &Environment,
 ) -> u64 {
-    fn put(words: &mut Vec<u64>, vs: &[Vec3]) {
+    fn put(words: &mut WordHash, vs: &[Vec3]) {
         for v in vs {
             words.extend(v.to_array().map(|x| x.to_bits() as u64));
         }
     }
-    let mut w: Vec<u64> = Vec::with_capacity(mesh.triangles.len() * 20 + 64);
+    // streamed (the same value as hash_words of all the words: a buffer of them took 160 bytes
+    // per triangle, a third of the peak memory of loading a million)
+    let mut w = WordHash::default();
     for t in &mesh.triangles {
         put(&mut w, &t.p);
         if let Some(n) = &t.normals {
@@ -54,7 +56,7 @@ pub(super) fn content_hash(
     // a constant environment's three words stand where they always stood: old hashes hold
     w.extend(env.hash_words());
     w.push(camera.fov_deg.to_bits() as u64);
-    hash_words(&w)
+    w.finish()
 }
 
 /// `hash` extended by what textures add to the image: every triangle's texture coordinates,
@@ -67,7 +69,7 @@ pub(super) fn texture_hash(
     textures: &TextureSet,
 ) -> u64 {
     // streamed: a buffer of the words took 32 bytes per texel
-    let mut w = crate::math::WordHash::default();
+    let mut w = WordHash::default();
     w.push(hash);
     let f = |x: f32| x.to_bits() as u64;
     for t in &mesh.triangles {

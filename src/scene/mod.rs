@@ -133,9 +133,8 @@ impl Scene {
         mut warnings: Vec<String>,
     ) -> Result<Scene> {
         check_mesh(&source, &mesh, materials.len())?;
-        let positions: Vec<[Vec3; 3]> = mesh.triangles.iter().map(|t| t.p).collect();
-        let accel = Accel::build(&positions);
-        let (lo, hi) = bounds(&positions);
+        let accel = Accel::build_from(mesh.triangles.iter().map(|t| t.p));
+        let (lo, hi) = bounds(mesh.triangles.iter().map(|t| &t.p));
         let shading = shading_in_bvh_order(&accel, &mesh);
         let extent = lo
             .abs()
@@ -228,6 +227,15 @@ impl Scene {
             .chain(self.files.iter().map(PathBuf::as_path))
             .map(|p| ("the scene's file", p))
             .collect()
+    }
+
+    /// Bytes the geometry holds: the BVH with its triangles and index maps, and the shading
+    /// data (normals, texture coordinates, materials), in that order.
+    pub fn memory_bytes(&self) -> (usize, usize) {
+        (
+            self.accel.memory_bytes(),
+            std::mem::size_of_val(self.shading.as_slice()),
+        )
     }
 
     /// Number of triangles.
@@ -414,10 +422,10 @@ fn check_mesh(source: &Path, mesh: &Mesh, materials: usize) -> Result<()> {
 }
 
 /// The corners `(lo, hi)` of the bounding box of the triangles' vertices.
-fn bounds(positions: &[[Vec3; 3]]) -> (Vec3, Vec3) {
+fn bounds<'a>(positions: impl Iterator<Item = &'a [Vec3; 3]>) -> (Vec3, Vec3) {
     let mut lo = Vec3::splat(f32::INFINITY);
     let mut hi = Vec3::splat(f32::NEG_INFINITY);
-    for p in positions.iter().flatten() {
+    for p in positions.flatten() {
         lo = lo.min(*p);
         hi = hi.max(*p);
     }
@@ -427,9 +435,10 @@ fn bounds(positions: &[[Vec3; 3]]) -> (Vec3, Vec3) {
 /// The shading data of the mesh's triangles in the BVH's order: the unit geometric normal by
 /// winding, the unit vertex normals (the geometric one where the file has none) and the UVs.
 fn shading_in_bvh_order(accel: &Accel, mesh: &Mesh) -> Vec<TriShading> {
+    use rayon::prelude::*;
     accel
         .order
-        .iter()
+        .par_iter()
         .map(|&i| {
             let t = &mesh.triangles[i as usize];
             let ng = (t.p[1] - t.p[0]).cross(t.p[2] - t.p[0]).normalize_or_zero();

@@ -105,12 +105,29 @@ pub(super) fn read_text(path: &Path) -> Result<String> {
 /// Load `path` into a triangle soup, its materials, their textures and any warnings; with
 /// `strict` a leniency is an error (module doc).
 pub fn load_obj(path: &Path, strict: bool) -> Result<ObjFile> {
+    // refused with the estimate before the text is read, and before the mesh is built
+    let memory = |what: String, bytes: u64| {
+        crate::limits::check_bytes(&what, bytes).map_err(|e| Error::Scene {
+            path: path.to_path_buf(),
+            message: e.to_string().replace("invalid setting: ", ""),
+        })
+    };
+    let len = std::fs::metadata(path).map_or(0, |m| m.len());
+    memory(
+        format!("reading its {:.0} MB of text", len as f64 / 1e6),
+        len.saturating_mul(crate::limits::OBJ_BYTES_PER_TEXT_BYTE),
+    )?;
     let text = read_text(path)?;
     let obj = objparse::parse(&text).map_err(|message| Error::Obj {
         path: path.to_path_buf(),
         message,
     })?;
     drop(text);
+    let n = obj.triangles.len() as u64;
+    memory(
+        format!("a scene of {n} triangles"),
+        n.saturating_mul(crate::limits::SCENE_PEAK_BYTES_PER_TRIANGLE),
+    )?;
     let mut notes = Notes {
         strict,
         warnings: Vec::new(),
@@ -347,35 +364,39 @@ fn triangles(
     ids: &[u32],
     fallback: u32,
 ) -> Result<(Vec<MeshTriangle>, usize)> {
-    let mut out = Vec::with_capacity(obj.triangles.len());
-    let mut degenerate = 0usize;
+    use rayon::prelude::*;
     let normal = |c: &Corner| {
         (c.vn != NONE)
             .then(|| obj.normals[c.vn as usize])
             .filter(|n| n.length_squared() > 0.0)
     };
-    for (t, m) in obj.triangles.iter().zip(&obj.material) {
-        let p = t.map(|c| obj.positions[c.v as usize]);
-        if (p[1] - p[0]).cross(p[2] - p[0]).length_squared() == 0.0 {
-            degenerate += 1;
-            continue;
-        }
-        let n = t.map(|c| normal(&c));
-        let normals = match n {
-            [Some(a), Some(b), Some(c)] => Some([a, b, c]),
-            _ => None,
-        };
-        let uvs = t
-            .iter()
-            .all(|c| c.vt != NONE)
-            .then(|| t.map(|c| obj.texcoords[c.vt as usize]));
-        out.push(MeshTriangle {
-            p,
-            normals,
-            uvs,
-            material: m.map_or(fallback, |k| ids[k as usize]),
-        });
-    }
+    // in parallel, in file order (collect keeps the order)
+    let out: Vec<MeshTriangle> = obj
+        .triangles
+        .par_iter()
+        .zip(&obj.material)
+        .filter_map(|(t, m)| {
+            let p = t.map(|c| obj.positions[c.v as usize]);
+            if (p[1] - p[0]).cross(p[2] - p[0]).length_squared() == 0.0 {
+                return None;
+            }
+            let normals = match t.map(|c| normal(&c)) {
+                [Some(a), Some(b), Some(c)] => Some([a, b, c]),
+                _ => None,
+            };
+            let uvs = t
+                .iter()
+                .all(|c| c.vt != NONE)
+                .then(|| t.map(|c| obj.texcoords[c.vt as usize]));
+            Some(MeshTriangle {
+                p,
+                normals,
+                uvs,
+                material: m.map_or(fallback, |k| ids[k as usize]),
+            })
+        })
+        .collect();
+    let degenerate = obj.triangles.len() - out.len();
     Ok((out, degenerate))
 }
 

@@ -150,7 +150,8 @@ pub(super) fn uncommented(line: &str) -> &str {
     let named =
         NAMED.contains(&tag) || tag.len() > 4 && tag.as_bytes()[..4].eq_ignore_ascii_case(b"map_");
     if !named {
-        return t.find('#').map_or(t, |k| t[..k].trim_end());
+        let hash = t.as_bytes().iter().position(|&b| b == b'#');
+        return hash.map_or(t, |k| t[..k].trim_end());
     }
     let b = t.as_bytes();
     let cut = (0..b.len()).find(|&k| {
@@ -168,7 +169,8 @@ fn parse_chunk(text: &str) -> Chunk {
     while let Some((no, raw)) = lines.next() {
         c.lines = no + 1;
         let line = raw.strip_suffix('\r').unwrap_or(raw);
-        let result = if uncommented(line).ends_with('\\') {
+        // (a line that does not end in `\` needs no closer look)
+        let result = if line.trim_end().ends_with('\\') && uncommented(line).ends_with('\\') {
             // a `\` at the end continues the statement on the next line
             let mut joined = String::new();
             let mut part = line;
