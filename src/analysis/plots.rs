@@ -26,6 +26,164 @@ pub(crate) fn register_font() {
     });
 }
 
+/// A bitmap of `size` over `buf` (RGB8), whose text is drawn with each glyph at its own left
+/// side bearing ([`Glyphs`]).
+pub(crate) fn bitmap(buf: &mut [u8], size: (u32, u32)) -> Glyphs<BitMapBackend<'_>> {
+    Glyphs(BitMapBackend::with_buffer(buf, size))
+}
+
+/// A plotters backend `B` whose text is rasterized here: plotters' own ab_glyph path places each
+/// glyph at the pen position without its left side bearing, so a narrow glyph (`.`, `-`, `1`)
+/// is drawn against the glyph before it and leaves a gap after (the plots' tick labels read
+/// `0 5`, `20 0`). Everything else goes to `B`; the layout box and the anchor are plotters'.
+pub(crate) struct Glyphs<B>(pub(crate) B);
+
+impl<B: plotters_backend::DrawingBackend> plotters_backend::DrawingBackend for Glyphs<B> {
+    type ErrorType = B::ErrorType;
+
+    fn get_size(&self) -> (u32, u32) {
+        self.0.get_size()
+    }
+
+    fn ensure_prepared(&mut self) -> BackendResult<B::ErrorType> {
+        self.0.ensure_prepared()
+    }
+
+    fn present(&mut self) -> BackendResult<B::ErrorType> {
+        self.0.present()
+    }
+
+    fn draw_pixel(
+        &mut self,
+        point: plotters_backend::BackendCoord,
+        color: plotters_backend::BackendColor,
+    ) -> BackendResult<B::ErrorType> {
+        self.0.draw_pixel(point, color)
+    }
+
+    fn draw_line<S: plotters_backend::BackendStyle>(
+        &mut self,
+        from: plotters_backend::BackendCoord,
+        to: plotters_backend::BackendCoord,
+        style: &S,
+    ) -> BackendResult<B::ErrorType> {
+        self.0.draw_line(from, to, style)
+    }
+
+    fn draw_rect<S: plotters_backend::BackendStyle>(
+        &mut self,
+        upper_left: plotters_backend::BackendCoord,
+        bottom_right: plotters_backend::BackendCoord,
+        style: &S,
+        fill: bool,
+    ) -> BackendResult<B::ErrorType> {
+        self.0.draw_rect(upper_left, bottom_right, style, fill)
+    }
+
+    fn draw_path<S: plotters_backend::BackendStyle, I: IntoIterator<Item = (i32, i32)>>(
+        &mut self,
+        path: I,
+        style: &S,
+    ) -> BackendResult<B::ErrorType> {
+        self.0.draw_path(path, style)
+    }
+
+    fn draw_circle<S: plotters_backend::BackendStyle>(
+        &mut self,
+        center: plotters_backend::BackendCoord,
+        radius: u32,
+        style: &S,
+        fill: bool,
+    ) -> BackendResult<B::ErrorType> {
+        self.0.draw_circle(center, radius, style, fill)
+    }
+
+    fn fill_polygon<S: plotters_backend::BackendStyle, I: IntoIterator<Item = (i32, i32)>>(
+        &mut self,
+        vert: I,
+        style: &S,
+    ) -> BackendResult<B::ErrorType> {
+        self.0.fill_polygon(vert, style)
+    }
+
+    fn blit_bitmap(
+        &mut self,
+        pos: plotters_backend::BackendCoord,
+        (iw, ih): (u32, u32),
+        src: &[u8],
+    ) -> BackendResult<B::ErrorType> {
+        self.0.blit_bitmap(pos, (iw, ih), src)
+    }
+
+    /// plotters' default `draw_text` (layout box, anchor, transform), with each glyph's pixels
+    /// moved right by its left side bearing (its outline's left edge from the pen position).
+    fn draw_text<S: plotters_backend::BackendTextStyle>(
+        &mut self,
+        text: &str,
+        style: &S,
+        pos: plotters_backend::BackendCoord,
+    ) -> BackendResult<B::ErrorType> {
+        use ab_glyph::{Font, FontRef, ScaleFont};
+        use plotters_backend::text_anchor::{HPos, VPos};
+        use plotters_backend::{BackendColor, DrawingErrorKind};
+        let color = style.color();
+        if color.alpha == 0.0 {
+            return Ok(());
+        }
+        let ((min_x, min_y), (max_x, max_y)) = style
+            .layout_box(text)
+            .map_err(|e| DrawingErrorKind::FontError(Box::new(e)))?;
+        let (width, height) = (max_x - min_x, max_y - min_y);
+        let dx = match style.anchor().h_pos {
+            HPos::Left => 0,
+            HPos::Right => -width,
+            HPos::Center => -width / 2,
+        };
+        let dy = match style.anchor().v_pos {
+            VPos::Top => 0,
+            VPos::Center => -height / 2,
+            VPos::Bottom => -height,
+        };
+        let Ok(font) = FontRef::try_from_slice(epaint_default_fonts::HACK_REGULAR) else {
+            return Ok(());
+        };
+        let size = style.size() as f32;
+        let font = font.as_scaled(size);
+        let trans = style.transform();
+        let (w, h) = self.get_size();
+        let (mut pen, mut prev) = (0f32, None);
+        for c in text.chars() {
+            let id = font.glyph_id(c);
+            if let Some(p) = prev {
+                pen += font.kern(p, id);
+            }
+            prev = Some(id);
+            if let Some(q) = font.outline_glyph(font.scaled_glyph(c)) {
+                let rect = q.px_bounds();
+                let (x0, y0) = ((pen + rect.min.x) as i32, (size / 2.0 + rect.min.y) as i32);
+                let mut pixels = Vec::new();
+                q.draw(|x, y, cov| pixels.push((x as i32 + x0, y as i32 + y0, cov)));
+                for (x, y, cov) in pixels {
+                    let (x, y) = trans.transform(x + dx - min_x, y + dy - min_y);
+                    let (x, y) = (pos.0 + x, pos.1 + y);
+                    if x >= 0 && x < w as i32 && y >= 0 && y < h as i32 {
+                        let c = BackendColor {
+                            alpha: color.alpha * cov as f64,
+                            rgb: color.rgb,
+                        };
+                        self.0.draw_pixel((x, y), c)?;
+                    }
+                }
+            }
+            pen += font.h_advance(id);
+        }
+        Ok(())
+    }
+}
+
+/// What a backend's drawing returns.
+type BackendResult<E> = std::result::Result<(), plotters_backend::DrawingErrorKind<E>>;
+
 pub(crate) fn draw_err(path: &Path, e: impl std::fmt::Display) -> Error {
     Error::Write {
         path: path.to_path_buf(),
@@ -120,7 +278,7 @@ pub fn write_calibration_plot(
     let size = (900u32, 700u32);
     let mut buf = vec![0u8; (size.0 * size.1 * 3) as usize];
     draw_calibration(
-        BitMapBackend::with_buffer(&mut buf, size).into_drawing_area(),
+        bitmap(&mut buf, size).into_drawing_area(),
         points,
         per_sample,
     )
@@ -259,7 +417,7 @@ pub fn write_convergence_plot(path: &Path, c: &Convergence, title: &str) -> Resu
         Format::from_path(path)?;
         let mut buf = vec![0u8; (size.0 * size.1 * 3) as usize];
         draw_convergence(
-            BitMapBackend::with_buffer(&mut buf, size).into_drawing_area(),
+            bitmap(&mut buf, size).into_drawing_area(),
             c,
             title,
         )
@@ -438,7 +596,7 @@ impl Canvas {
     /// Write `lines` of text, the first at (x, y), 16 pixels apart.
     fn text(&mut self, lines: &[(String, u32, u32)]) -> Result<()> {
         register_font();
-        let root = BitMapBackend::with_buffer(&mut self.buf, (self.w, self.h)).into_drawing_area();
+        let root = bitmap(&mut self.buf, (self.w, self.h)).into_drawing_area();
         let style = (FONT, 14).into_font().color(&BLACK);
         for (s, x, y) in lines {
             root.draw(&Text::new(s.clone(), (*x as i32, *y as i32), style.clone()))

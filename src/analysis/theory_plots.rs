@@ -85,7 +85,7 @@ fn write_either(path: &Path, size: (u32, u32), figure: &impl Figure) -> Result<(
         crate::image_io::Format::from_path(path)?;
         let mut buf = vec![0u8; (size.0 * size.1 * 3) as usize];
         figure
-            .draw(BitMapBackend::with_buffer(&mut buf, size).into_drawing_area())
+            .draw(crate::analysis::plots::bitmap(&mut buf, size).into_drawing_area())
             .map_err(|m| draw_err(path, m))?;
         crate::image_io::write_png_rgb8(path, size.0, size.1, &buf)
     }
