@@ -416,12 +416,8 @@ pub fn write_convergence_plot(path: &Path, c: &Convergence, title: &str) -> Resu
     } else {
         Format::from_path(path)?;
         let mut buf = vec![0u8; (size.0 * size.1 * 3) as usize];
-        draw_convergence(
-            bitmap(&mut buf, size).into_drawing_area(),
-            c,
-            title,
-        )
-        .map_err(|m| draw_err(path, m))?;
+        draw_convergence(bitmap(&mut buf, size).into_drawing_area(), c, title)
+            .map_err(|m| draw_err(path, m))?;
         write_png_rgb8(path, size.0, size.1, &buf)
     }
 }

@@ -10,7 +10,8 @@
 //!   with the independent points' expectation `√(5/(36N))`.
 //! - [`write_integrate_picture`]: per integrand and direction strategy, the variance of the
 //!   estimate against `N` on log-log axes, one line per sampler with its fitted slope, and the
-//!   formula `σ²/N` dashed.
+//!   formulas `σ²/N` and `(1/N²) Σ σᵢ²` dashed;
+//! - [`write_lecture_figure`]: the lecture's Figure 2, a curve sampled without and with strata.
 //!
 //! SVG by the path's extension, else PNG.
 
@@ -368,6 +369,8 @@ pub struct ConvergencePanel {
     pub lines: Vec<(String, Vec<[f64; 2]>, f64)>,
     /// The formula `σ²/N` at each N (empty where it is 0: `p ∝ f`).
     pub predicted: Vec<[f64; 2]>,
+    /// The jittered formula `(1/N²) Σ σᵢ²` at each N (empty without jittered rows).
+    pub jittered: Vec<[f64; 2]>,
 }
 
 /// Write the variance-against-N plots (see the module doc), three to a row, to `path`.
@@ -403,6 +406,7 @@ fn draw_integrate_panel<DB: DrawingBackend>(
             .iter()
             .flat_map(|l| l.1.iter())
             .chain(p.predicted.iter())
+            .chain(p.jittered.iter())
             .filter(|q| q[1] > 0.0)
     };
     let (n0, n1) = all().fold((f64::MAX, 1.0f64), |(a, b), q| (a.min(q[0]), b.max(q[0])));
@@ -456,6 +460,17 @@ fn draw_integrate_panel<DB: DrawingBackend>(
             .label("σ²/N")
             .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(1)));
     }
+    if !p.jittered.is_empty() {
+        chart
+            .draw_series(DashedLineSeries::new(
+                p.jittered.iter().map(|q| (q[0], q[1])),
+                3,
+                3,
+                BLACK.stroke_width(1),
+            ))?
+            .label("(1/N²) Σ σ_i²")
+            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(1)));
+    }
     chart
         .configure_series_labels()
         .label_font((FONT, 11))
@@ -463,4 +478,123 @@ fn draw_integrate_panel<DB: DrawingBackend>(
         .border_style(BLACK)
         .position(SeriesLabelPosition::LowerLeft)
         .draw()
+}
+
+/// The lecture's Figure 2 (`vrpt integrate --figure`): a 1D integrand with N points from `p`
+/// (top) and with one point in each of N strata (bottom), each with its variance as `vrpt
+/// integrate` measures and predicts it.
+pub struct LectureFigure {
+    /// The points of each set (N).
+    pub n: u32,
+    /// The independent points and their variance.
+    pub unstratified: LectureSet,
+    /// The jittered points and their variance.
+    pub stratified: LectureSet,
+}
+
+/// One set of the figure: its points, and the estimator's variance predicted and measured (with
+/// its standard error) over `repetitions` sets.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LectureSet {
+    /// The set's points in `[0, 1)`.
+    pub points: Vec<f64>,
+    /// The formula's variance of the estimator.
+    pub predicted: f64,
+    /// The measured variance over `repetitions` sets.
+    pub measured: f64,
+    /// The standard error of `measured` (from the estimates' fourth moment).
+    pub measured_se: f64,
+    /// How many sets were measured.
+    pub repetitions: u32,
+}
+
+/// Write [`LectureFigure`] to `path` (SVG by its extension, else PNG).
+pub fn write_lecture_figure(path: &Path, figure: &LectureFigure) -> Result<()> {
+    write_either(path, (900, 620), figure)
+}
+
+impl Figure for LectureFigure {
+    fn draw<DB: DrawingBackend>(
+        &self,
+        root: DrawingArea<DB, Shift>,
+    ) -> std::result::Result<(), String> {
+        let e = |x: plotters::drawing::DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
+        root.fill(&WHITE).map_err(e)?;
+        let (top, bottom) = root.split_vertically(310);
+        let n = self.n;
+        let set = &self.unstratified;
+        let caption = format!("unstratified: all {n} points from p = 1");
+        let said = variance_words(set, "σ²/N");
+        draw_lecture_panel(&top, (&caption, &said), &set.points, None, PALETTE[0]).map_err(e)?;
+        let set = &self.stratified;
+        let caption = format!("stratified: one point from p restricted to each of {n} strata");
+        let said = variance_words(set, "(1/N²) Σ σ_i²");
+        draw_lecture_panel(&bottom, (&caption, &said), &set.points, Some(n), PALETTE[1])
+            .map_err(e)?;
+        root.present().map_err(e)
+    }
+}
+
+/// `Var = formula = predicted; measured ± se over R sets` for a set.
+fn variance_words(s: &LectureSet, formula: &str) -> String {
+    format!(
+        "Var[Ĩ] = {formula} = {:.3e}; measured {:.3e} ± {:.1e} ({} sets)",
+        s.predicted, s.measured, s.measured_se, s.repetitions
+    )
+}
+
+/// One panel of the lecture's figure: the curve, the points dropped onto it, the strata.
+fn draw_lecture_panel<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    (caption, said): (&str, &str),
+    points: &[f64],
+    strata: Option<u32>,
+    colour: RGBColor,
+) -> DrawResult<DB> {
+    use crate::analysis::integrate::{Domain, Integrand};
+    let f = |x: f64| Integrand::Curve.g(Domain::Line, Vec2::new(x as f32, 0.0));
+    let mut chart = ChartBuilder::on(area)
+        .caption(caption, (FONT, 15))
+        .margin(12)
+        .x_label_area_size(28)
+        .y_label_area_size(40)
+        .build_cartesian_2d(0.0..1.0f64, 0.0..2.6f64)?;
+    chart
+        .configure_mesh()
+        .disable_mesh()
+        .x_desc("x")
+        .y_desc("f(x)")
+        .label_style((FONT, 11))
+        .x_label_formatter(&|x| format!("{x:.1}"))
+        .y_label_formatter(&|y| format!("{y:.1}"))
+        .draw()?;
+    if let Some(n) = strata {
+        for k in 0..n {
+            let (a, b) = (k as f64 / n as f64, (k + 1) as f64 / n as f64);
+            let shade = if k % 2 == 0 { 0.10 } else { 0.04 };
+            chart.draw_series(std::iter::once(Rectangle::new(
+                [(a, 0.0), (b, 2.45)],
+                colour.mix(shade).filled(),
+            )))?;
+        }
+    }
+    let curve: Vec<(f64, f64)> = (0..=400)
+        .map(|i| i as f64 / 400.0)
+        .map(|x| (x, f(x)))
+        .collect();
+    chart.draw_series(LineSeries::new(curve, BLACK.stroke_width(2)))?;
+    for &x in points {
+        let y = f(x);
+        chart.draw_series(LineSeries::new(
+            vec![(x, 0.0), (x, y)],
+            colour.stroke_width(1),
+        ))?;
+        chart.draw_series(std::iter::once(Circle::new((x, y), 4, colour.filled())))?;
+    }
+    chart.draw_series(std::iter::once(Text::new(
+        said.to_string(),
+        (0.33, 2.4),
+        (FONT, 12).into_font(),
+    )))?;
+    Ok(())
 }

@@ -15,7 +15,7 @@ use crate::analysis::points::{
     rms_discrepancy, PointWarp, CURVE_SIZES,
 };
 use crate::error::{Error, Result};
-use crate::render::{independent, sobol, stratified};
+use crate::render::{independent, jittered, sobol, stratified};
 use crate::sampler::SamplerKind;
 use glam::{UVec2, Vec2};
 use std::path::PathBuf;
@@ -163,6 +163,7 @@ pub fn realisations(kind: SamplerKind, seed: u64, n: u32, dim: usize, m: u32) ->
             let pixel = UVec2::new(7, 3);
             match kind {
                 SamplerKind::Independent => draw_points(&independent, s, n, pixel, dim),
+                SamplerKind::Jittered => draw_points(&jittered, s, n, pixel, dim),
                 SamplerKind::Stratified => draw_points(&stratified, s, n, pixel, dim),
                 SamplerKind::Sobol => draw_points(&sobol, s, n, pixel, dim),
             }
@@ -241,7 +242,8 @@ fn rows_view<'a>(
             label: &r.sampler,
             points: &r.points,
             warp: req.warp,
-            strata: (r.sampler == "stratified").then(|| crate::sampler::grid_shape(r.n)),
+            strata: (r.sampler == "stratified" || r.sampler == "jittered")
+                .then(|| crate::sampler::grid_shape(r.n)),
             box_size: (r.box_size[0], r.box_size[1]),
             caption: format!(
                 "{}: D2* {:.2e}; box {:.3} vs {:.3}",

@@ -237,6 +237,11 @@ pub fn independent(seed: u64, _: SamplePass) -> IndependentSampler {
 pub fn stratified(seed: u64, pass: SamplePass) -> StratifiedSampler {
     StratifiedSampler::with_origin(seed, pass.size, pass.origin)
 }
+
+/// The jittered sampler's factory: the lecture's stratification, one uniform point per cell.
+pub fn jittered(seed: u64, pass: SamplePass) -> StratifiedSampler {
+    StratifiedSampler::jittered(seed, pass.size, pass.origin)
+}
 /// Owen-scrambled Sobol points.
 pub fn sobol(seed: u64, _: SamplePass) -> SobolSampler {
     SobolSampler::new(seed)
@@ -256,6 +261,7 @@ pub(crate) fn with_sampler<W: WithSampler>(kind: SamplerKind, work: W) -> W::Out
     match kind {
         SamplerKind::Independent => work.run(&independent),
         SamplerKind::Stratified => work.run(&stratified),
+        SamplerKind::Jittered => work.run(&jittered),
         SamplerKind::Sobol => work.run(&sobol),
     }
 }

@@ -59,8 +59,12 @@ pub trait Sampler: Clone + Send + Sync {
 pub enum SamplerKind {
     /// Every number i.i.d. uniform.
     Independent,
-    /// Jittered strata per dimension (N strata in 1D, an a×b grid in 2D with a·b = N), visited
-    /// in a hashed order that differs per dimension; square spp (16, 64, 256) stratify best in
+    /// The lecture's stratification: N strata in 1D, an a×b grid of cells in 2D (a·b = N, as
+    /// square as N allows), one uniform point in each, visited in an order that differs per
+    /// dimension: the variance is exactly (1/N²) Σ σ²ᵢ over the cells.
+    Jittered,
+    /// Jittered strata per dimension, their 2D points also multi-jittered (Kensler: each
+    /// coordinate alone stratified into N intervals); square spp (16, 64, 256) stratify best in
     /// 2D, a prime spp gives N×1 slabs.
     #[default]
     Stratified,

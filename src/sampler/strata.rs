@@ -1,7 +1,10 @@
 //! The shapes of a stratified set and the permutations of its strata: the 2D grid N strata
 //! make ([`grid_shape`]), the set sizes that keep that grid off a sliver ([`stratifiable`]),
 //! and Kensler's keyed permutation of `0..n` ([`permute_index`]) with the one-multiplication
-//! division it walks with.
+//! division it walks with; the exact shuffle and uniform draws the samplers' tables are built
+//! with.
+
+use crate::math::mix64;
 
 /// The 2D grid `(a, b)` for N strata: `a·b = N`, `a ≤ b`, as square as N allows.
 pub fn grid_shape(n: u32) -> (u32, u32) {
@@ -120,5 +123,55 @@ impl FastDiv {
     pub(super) fn rem(&self, a: u32) -> u32 {
         let low = self.m.wrapping_mul(a as u64);
         ((low as u128 * self.d as u128) >> 64) as u32
+    }
+}
+
+/// Shuffle `out` (at most 2¹⁶ entries) into a uniformly random permutation of its values:
+/// Fisher–Yates from the last position down, the index for position `i − 1` uniform in `0..i`
+/// from a 16-bit field of a SplitMix64 stream (`state`), four fields per step, by Lemire's
+/// multiply-shift with rejection: exactly uniform (a field that would make some index likelier
+/// is passed over, with probability below i/2¹⁶).
+#[inline(always)]
+pub(super) fn shuffle(out: &mut [u32], state: &mut u64) {
+    let mut i = out.len();
+    while i > 1 {
+        *state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut bits = mix64(*state);
+        for _ in 0..4 {
+            if i <= 1 {
+                break;
+            }
+            let bound = i as u32;
+            let m = (bits as u32 & 0xffff) * bound;
+            bits >>= 16;
+            let low = m & 0xffff;
+            if low >= bound || low >= (0x1_0000 - bound) % bound {
+                out.swap(i - 1, (m >> 16) as usize);
+                i -= 1;
+            }
+        }
+    }
+}
+
+/// Fill `out` with independent uniform integers in `0..bound` (`bound` ≤ 2¹⁶), from the
+/// stream `state` as [`shuffle`] draws them.
+#[inline(always)]
+pub(super) fn uniform(out: &mut [u32], bound: u32, state: &mut u64) {
+    let mut i = 0;
+    while i < out.len() {
+        *state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut bits = mix64(*state);
+        for _ in 0..4 {
+            if i == out.len() {
+                break;
+            }
+            let m = (bits as u32 & 0xffff) * bound;
+            bits >>= 16;
+            let low = m & 0xffff;
+            if low >= bound || low >= (0x1_0000 - bound) % bound {
+                out[i] = m >> 16;
+                i += 1;
+            }
+        }
     }
 }

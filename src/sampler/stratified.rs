@@ -1,4 +1,5 @@
-//! The stratified (jittered) sampler.
+//! The stratified samplers: `stratified` (jittered strata, 2D points multi-jittered) and
+//! `jittered` (the lecture's: one uniform point per stratum; [`StratifiedSampler::jittered`]).
 //!
 //! With N samples per pixel per pass, a 1D dimension is split into N strata `[k/N, (k+1)/N)` and
 //! a 2D dimension into an a×b grid (a·b = N, a the largest divisor of N not above √N, so a prime
@@ -41,7 +42,7 @@
 //! merge` of the two counts no sample twice. (Keyed by `⌊s/N⌋` alone, a set starting at 5
 //! was the set starting at 0 again, one slot on.)
 
-use super::strata::{grid_shape, mask_of, permute_with, FastDiv};
+use super::strata::{grid_shape, mask_of, permute_with, shuffle, uniform, FastDiv};
 use super::{Sampler, ONE_MINUS_EPSILON};
 use crate::math::{hash_words, mix64};
 use glam::{UVec2, Vec2};
@@ -63,56 +64,6 @@ pub const TABLE_MAX_N: u32 = 4096;
 /// the few paths that Russian roulette and escapes leave (tables for all 37 dimensions of depth
 /// 8 were 17 % of a Cornell box render's instructions): those are hashed per draw.
 pub const TABLE_DIMS: u32 = 16;
-
-/// Shuffle `out` (at most 2¹⁶ entries) into a uniformly random permutation of its values:
-/// Fisher–Yates from the last position down, the index for position `i − 1` uniform in `0..i`
-/// from a 16-bit field of a SplitMix64 stream (`state`), four fields per step, by Lemire's
-/// multiply-shift with rejection: exactly uniform (a field that would make some index likelier
-/// is passed over, with probability below i/2¹⁶).
-#[inline(always)]
-fn shuffle(out: &mut [u32], state: &mut u64) {
-    let mut i = out.len();
-    while i > 1 {
-        *state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut bits = mix64(*state);
-        for _ in 0..4 {
-            if i <= 1 {
-                break;
-            }
-            let bound = i as u32;
-            let m = (bits as u32 & 0xffff) * bound;
-            bits >>= 16;
-            let low = m & 0xffff;
-            if low >= bound || low >= (0x1_0000 - bound) % bound {
-                out.swap(i - 1, (m >> 16) as usize);
-                i -= 1;
-            }
-        }
-    }
-}
-
-/// Fill `out` with independent uniform integers in `0..bound` (`bound` ≤ 2¹⁶), from the
-/// stream `state` as [`shuffle`] draws them.
-#[inline(always)]
-fn uniform(out: &mut [u32], bound: u32, state: &mut u64) {
-    let mut i = 0;
-    while i < out.len() {
-        *state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut bits = mix64(*state);
-        for _ in 0..4 {
-            if i == out.len() {
-                break;
-            }
-            let m = (bits as u32 & 0xffff) * bound;
-            bits >>= 16;
-            let low = m & 0xffff;
-            if low >= bound || low >= (0x1_0000 - bound) % bound {
-                out[i] = m >> 16;
-                i += 1;
-            }
-        }
-    }
-}
 
 /// A dropped sampler's buffers (tags, table, scratch), kept per thread for the next one.
 type Buffers = (Vec<u64>, Vec<u32>, Vec<u32>);
@@ -158,6 +109,9 @@ pub struct StratifiedSampler {
     inv: f32,
     /// `log2 N` when N is a power of two up to 2²⁴ (exact placement in a stratum), else none.
     log2: Option<u32>,
+    /// 2D points multi-jittered (each coordinate also stratified into N intervals: the
+    /// `stratified` sampler), or jittered only (one uniform point per cell: `jittered`).
+    multi: bool,
     /// Key of the current (pixel, pass, N), the pixel and pass it belongs to, and the count of
     /// (pixel, pass)es entered (a table is current when its tag holds this generation).
     key: u64,
@@ -195,6 +149,24 @@ impl StratifiedSampler {
     /// its own size. Sets that start at different indices are independent (the module doc).
     /// Indices below `origin` are not valid.
     pub fn with_origin(seed: u64, samples_per_pass: u32, origin: u32) -> Self {
+        Self::make(seed, samples_per_pass, origin, true)
+    }
+
+    /// The lecture's stratification, `--sampler jittered`: as [`StratifiedSampler::with_origin`]
+    /// (the same strata in 1D, the same a×b cells in 2D, visited in a random order per
+    /// dimension), but a 2D point is uniform in its cell, with no constraint between cells: the
+    /// estimator's variance is then exactly `(1/N²) Σᵢ σ²ᵢ` over the cells. Other streams than
+    /// `stratified`'s.
+    pub fn jittered(seed: u64, samples_per_pass: u32, origin: u32) -> Self {
+        Self::make(
+            seed ^ 0x4a49_5454_4552_4544,
+            samples_per_pass,
+            origin,
+            false,
+        ) // "JITTERED"
+    }
+
+    fn make(seed: u64, samples_per_pass: u32, origin: u32, multi: bool) -> Self {
         let n = samples_per_pass.max(1);
         let (a, b) = grid_shape(n);
         // buffers a dropped sampler of this thread left (an adaptive round makes one sampler
@@ -217,6 +189,7 @@ impl StratifiedSampler {
             mask_b: mask_of(b),
             inv: 1.0 / n as f32,
             log2: (n.is_power_of_two() && n <= 1 << 24).then(|| n.trailing_zeros()),
+            multi,
             key: 0,
             pixel: UVec2::MAX,
             pass: u32::MAX,
@@ -262,7 +235,20 @@ impl StratifiedSampler {
         }
         let mut draws = self.dim_key(d);
         let t = &mut self.table[d as usize * n..(d as usize + 1) * n];
-        if two_d {
+        if two_d && !self.multi {
+            // each cell's point uniform in it: a sub-column of its b and a sub-row of its a,
+            // each uniform and independent (the jitter places it inside the sub-cell)
+            let (a, b) = self.grid;
+            self.scratch.clear();
+            self.scratch.resize(2 * n, 0);
+            let (px, py) = self.scratch.split_at_mut(n);
+            uniform(px, b, &mut draws);
+            uniform(py, a, &mut draws);
+            for (k, e) in t.iter_mut().enumerate() {
+                let (sx, sy) = (k as u32 % a, k as u32 / a);
+                *e = (sx * b + px[k]) | (sy * a + py[k]) << 16;
+            }
+        } else if two_d {
             // σ (b sub-columns) and τ (a sub-rows), and a random cyclic shift per column (c)
             // and per row (r): column sx's sub-columns are σ shifted by c[sx], row sy's sub-rows
             // τ shifted by r[sy]. Then the cells' packed stratum indices in cell order (cell
@@ -407,6 +393,14 @@ impl Sampler for StratifiedSampler {
             let (a, b) = self.grid;
             let sy = self.div_a.div(s);
             let sx = s - sy * a;
+            if !self.multi {
+                // a uniform sub-column and sub-row (Lemire's multiply-shift of 32 hashed bits:
+                // a bias below b/2³²)
+                let k = mix64(dk ^ (self.j as u64).wrapping_mul(0x94d0_49bb_1331_11eb));
+                let px = (((k & 0xffff_ffff) * b as u64) >> 32) as u32;
+                let py = (((k >> 32) * a as u64) >> 32) as u32;
+                return Vec2::new(self.place(sx * b + px, h), self.place(sy * a + py, h << 24));
+            }
             let px = if b > 1 {
                 let k = mix64(dk ^ 0xd1b5_4a32_d192_ed03);
                 permute_with(sy, &self.div_b, self.mask_b, k as u32)
@@ -549,6 +543,36 @@ mod tests {
                     })
                     .collect();
                 assert_eq!(points(n, 2 * n, dim), pass2, "n={n} dim={dim}");
+            }
+        }
+    }
+
+    /// The jittered sampler's N points of a 2D dimension: one in each a×b cell (tables and
+    /// hashed draws), without the Latin constraint: a coordinate alone repeats some of its N
+    /// intervals in most sets (a uniform point per cell falls in one of the b intervals of its
+    /// column at random).
+    #[test]
+    fn jittered_points_fill_cells_only() {
+        for n in [7u32, 16, 64, TABLE_MAX_N + 3] {
+            let (a, b) = grid_shape(n);
+            let mut sampler = StratifiedSampler::jittered(5, n, 0);
+            let mut repeats = 0;
+            for dim in [0, 2, TABLE_DIMS + 1] {
+                let (mut cells, mut xs) = (vec![0; n as usize], vec![0; n as usize]);
+                for j in 0..n {
+                    sampler.start_pixel_sample(UVec2::new(3, 9), j);
+                    sampler.skip_2d(dim);
+                    let p = sampler.next_2d();
+                    assert!((0.0..1.0).contains(&p.x) && (0.0..1.0).contains(&p.y));
+                    let (cx, cy) = ((p.x * a as f32) as u32, (p.y * b as f32) as u32);
+                    cells[(cy * a + cx) as usize] += 1;
+                    xs[(p.x * n as f32) as usize] += 1;
+                }
+                assert!(cells.iter().all(|&c| c == 1), "n={n} dim={dim}: {cells:?}");
+                repeats += xs.iter().any(|&c| c > 1) as u32;
+            }
+            if b > 1 {
+                assert!(repeats > 0, "n={n}: every set Latin: not plain jittering");
             }
         }
     }

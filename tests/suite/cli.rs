@@ -1249,8 +1249,8 @@ fn integrate_writes_its_rows() {
     let rows: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     let rows = rows.as_array().unwrap();
-    // smooth: 1 domain, lobe: 3; × 3 samplers × 2 N, plus a covariance row per (…, sampler)
-    assert_eq!(rows.len(), 4 * 3 * 2 + 4 * 3);
+    // smooth: 1 domain, lobe: 3; × 4 samplers × 2 N, plus a covariance row per (…, sampler)
+    assert_eq!(rows.len(), 4 * 4 * 2 + 4 * 4);
     for r in rows {
         for key in [
             "integrand",
