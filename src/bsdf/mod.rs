@@ -26,7 +26,7 @@
 //! - `guided`: the BSDF's part of path guiding is `phong`; the integrator mixes it with the
 //!   learned guide ([`crate::guiding`]), so here `guided` samples and evaluates as `phong`.
 //!
-//! Mirrors and glass are delta lobes, in [`specular`]: a surface has either the Phong lobes or
+//! Mirrors and glass are delta lobes, [`Specular`] (`bsdf/specular.rs`): a surface has either the Phong lobes or
 //! one delta lobe, and the path loop asks only which.
 
 mod specular;

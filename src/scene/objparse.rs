@@ -2,7 +2,7 @@
 //! Mitsuba's importers), into positions, texture coordinates, normals and faces.
 //!
 //! - `#` starts a comment anywhere on a line (in a name only as a word of its own:
-//!   [`uncommented`]); a statement ending in `\` continues on the next line.
+//!   `uncommented`); a statement ending in `\` continues on the next line.
 //! - `v x y z [w]` (or `v x y z r g b`: the colour is skipped), `vt u [v [w]]`, `vn x y z`: their
 //!   numbers must parse, be finite and (positions) at most [`MAX_MAGNITUDE`]; a malformed number
 //!   here is refused with its line.
