@@ -26,8 +26,8 @@
 //! - `guided`: the BSDF's part of path guiding is `phong`; the integrator mixes it with the
 //!   learned guide ([`crate::guiding`]), so here `guided` samples and evaluates as `phong`.
 //!
-//! Mirrors and glass are delta lobes, [`Specular`] (`bsdf/specular.rs`): a surface has either the Phong lobes or
-//! one delta lobe, and the path loop asks only which.
+//! Mirrors and glass are delta lobes, [`Specular`] (`bsdf/specular.rs`): a surface has the Phong
+//! lobes, one delta lobe, or a mirror over a diffuse part, and the path loop asks only which.
 
 mod specular;
 
