@@ -17,7 +17,7 @@
 use glam::{UVec2, Vec2};
 use glam::{Vec3, Vec3A};
 use obvhs::{
-    cwbvh::{builder::build_cwbvh_from_tris, CwBvh},
+    cwbvh::{builder::build_cwbvh_from_tris, node::CwBvhNode, CwBvh},
     faststack::{FastStack, HeapStack, StackStack},
     ray::Ray,
     rt_triangle::RtTriangle,
@@ -84,6 +84,145 @@ impl<'s, S: FastStack<UVec2>> Walk<'s, S> {
             hitmask: 0,
         }
     }
+}
+
+/// The closest-hit walk over the CWBVH of `$acc` (obvhs's `traverse!`), each node tested by the
+/// function `$nodes(node, &ray, oct_inv4) -> hit mask`: a macro so that the AVX2 instance is compiled
+/// inside a function that enables AVX2 and its node test inlines there.
+macro_rules! closest_walk {
+    ($acc:expr, $stack:expr, $origin:expr, $dir:expr, $tmax:expr, $keep:expr, $nodes:path) => {{
+        let mut ray = Ray::new(Vec3A::from($origin), positive_zeros($dir), 0.0, $tmax);
+        let mut state = Walk::new($stack, ray.direction, $acc.bvh.nodes.is_empty());
+        let mut node;
+        // the closest hit so far: primitive, barycentric numerators, denominator
+        let mut best: Option<(u32, Vec2, f32)> = None;
+        obvhs::traverse!($acc.bvh, node, state, $nodes(node, &ray, state.oct_inv4), {
+            let id = state.primitive_id;
+            if let Some((t, n, det)) = hit_triangle(&$acc.tris[id as usize], &ray) {
+                if t < ray.tmax && $keep(id, n / det) {
+                    ray.tmax = t;
+                    best = Some((id, n, det));
+                }
+            }
+        });
+        best.map(|(prim, n, det)| {
+            // compute_barycentric's division, on the numerators of the test
+            let b = n / det;
+            Hit {
+                t: ray.tmax,
+                prim,
+                b1: b.x,
+                b2: b.y,
+            }
+        })
+    }};
+}
+
+/// The any-hit walk (stops at the first kept hit), as [`closest_walk`].
+macro_rules! any_walk {
+    ($acc:expr, $stack:expr, $origin:expr, $dir:expr, $tmax:expr, $keep:expr, $nodes:path) => {{
+        let ray = Ray::new(Vec3A::from($origin), positive_zeros($dir), 0.0, $tmax);
+        let mut state = Walk::new($stack, ray.direction, $acc.bvh.nodes.is_empty());
+        let mut node;
+        let mut hit = false;
+        'walk: {
+            obvhs::traverse!($acc.bvh, node, state, $nodes(node, &ray, state.oct_inv4), {
+                let id = state.primitive_id;
+                if let Some((_, n, det)) = hit_triangle(&$acc.tris[id as usize], &ray) {
+                    if $keep(id, n / det) {
+                        hit = true;
+                        break 'walk;
+                    }
+                }
+            });
+        }
+        hit
+    }};
+}
+
+/// Whether the CPU has AVX2 (std caches the answer).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn has_avx2() -> bool {
+    std::arch::is_x86_feature_detected!("avx2")
+}
+
+/// The children of `node` that `ray` hits: obvhs's own test (SSE where the target has it).
+#[inline(always)]
+fn node_hits(node: &CwBvhNode, ray: &Ray, oct_inv4: u32) -> u32 {
+    node.intersect_ray(ray, oct_inv4)
+}
+
+/// The `tmin` floor of obvhs's node test (its crate-private `EPSILON`).
+const NODE_EPSILON: f32 = 0.0001;
+
+/// The children of `node` that `ray` (octant `oct_inv4`) hits, as the traversal's hit mask:
+/// obvhs's `intersect_ray_simd` with its 8 children in one 8-wide test instead of two 4-wide
+/// ones, each child plane's 8 quantized bytes widened to floats by two instructions (obvhs sets
+/// each lane from a scalar conversion). The arithmetic is the same, operation for operation
+/// (a multiply, then an add, not a fused multiply-add; the same operand order of every `min`
+/// and `max`), so the mask is the same bits and so are the traversal and the image.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+fn node_hits_avx2(node: &CwBvhNode, ray: &Ray, oct_inv4: u32) -> u32 {
+    use std::arch::x86_64::*;
+    let dir_inv = node.compute_extent() * ray.inv_direction;
+    let orig = (Vec3A::from(node.p) - ray.origin) * ray.inv_direction;
+    // 8 bytes to 8 floats
+    let q = |v: &[u8; 8]| {
+        let bytes = _mm_set_epi64x(0, i64::from_le_bytes(*v));
+        _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(bytes))
+    };
+    let axis = |lo: &[u8; 8], hi: &[u8; 8], negative: bool, inv: f32, o: f32| {
+        let (near, far) = if negative {
+            (q(hi), q(lo))
+        } else {
+            (q(lo), q(hi))
+        };
+        let (inv, o) = (_mm256_set1_ps(inv), _mm256_set1_ps(o));
+        (
+            _mm256_add_ps(_mm256_mul_ps(near, inv), o),
+            _mm256_add_ps(_mm256_mul_ps(far, inv), o),
+        )
+    };
+    let d = ray.direction;
+    let (tmin_x, tmax_x) = axis(
+        &node.child_min_x,
+        &node.child_max_x,
+        d.x < 0.0,
+        dir_inv.x,
+        orig.x,
+    );
+    let (tmin_y, tmax_y) = axis(
+        &node.child_min_y,
+        &node.child_max_y,
+        d.y < 0.0,
+        dir_inv.y,
+        orig.y,
+    );
+    let (tmin_z, tmax_z) = axis(
+        &node.child_min_z,
+        &node.child_max_z,
+        d.z < 0.0,
+        dir_inv.z,
+        orig.z,
+    );
+    let tmin = _mm256_max_ps(tmin_x, _mm256_max_ps(tmin_y, tmin_z));
+    let tmax = _mm256_min_ps(tmax_x, _mm256_min_ps(tmax_y, tmax_z));
+    let tmin = _mm256_max_ps(tmin, _mm256_set1_ps(NODE_EPSILON));
+    let tmax = _mm256_min_ps(tmax, _mm256_set1_ps(ray.tmax));
+    let mut hits = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tmin, tmax)) as u32;
+    let (child_bits8, bit_index8) = node.get_child_and_index_bits(oct_inv4);
+    let mut mask = 0u32;
+    while hits != 0 {
+        let j = hits.trailing_zeros() as u64;
+        hits &= hits - 1;
+        let child_bits = ((child_bits8 >> (j * 8)) & 0xff) as u32;
+        let bit_index = ((bit_index8 >> (j * 8)) & 0xff) as u32;
+        mask |= child_bits << bit_index;
+    }
+    mask
 }
 
 /// The test of `RtTriangle::intersect` (the same arithmetic, so the same bits), returning the
@@ -262,6 +401,8 @@ impl Accel {
         self.any(&mut stack.0, origin, dir, tmax, |_, _| true)
     }
 
+    /// The closest hit (see [`Accel::intersect_with`]): with AVX2 where the CPU has it (asked
+    /// once, then a cached flag), else obvhs's SSE node test.
     #[inline(always)]
     fn closest<S: FastStack<UVec2>>(
         &self,
@@ -271,38 +412,16 @@ impl Accel {
         tmax: f32,
         keep: impl Fn(u32, Vec2) -> bool,
     ) -> Option<Hit> {
-        let mut ray = Ray::new(Vec3A::from(origin), positive_zeros(dir), 0.0, tmax);
-        let mut state = Walk::new(stack, ray.direction, self.bvh.nodes.is_empty());
-        let mut node;
-        // the closest hit so far: primitive, barycentric numerators, denominator
-        let mut best: Option<(u32, Vec2, f32)> = None;
-        obvhs::traverse!(
-            self.bvh,
-            node,
-            state,
-            node.intersect_ray(&ray, state.oct_inv4),
-            {
-                let id = state.primitive_id;
-                if let Some((t, n, det)) = hit_triangle(&self.tris[id as usize], &ray) {
-                    if t < ray.tmax && keep(id, n / det) {
-                        ray.tmax = t;
-                        best = Some((id, n, det));
-                    }
-                }
-            }
-        );
-        best.map(|(prim, n, det)| {
-            // compute_barycentric's division, on the numerators of the test
-            let b = n / det;
-            Hit {
-                t: ray.tmax,
-                prim,
-                b1: b.x,
-                b2: b.y,
-            }
-        })
+        #[cfg(target_arch = "x86_64")]
+        if has_avx2() {
+            // SAFETY: the CPU has AVX2, all the function asks
+            #[allow(unsafe_code)]
+            return unsafe { self.closest_avx2(stack, origin, dir, tmax, keep) };
+        }
+        self.closest_sse(stack, origin, dir, tmax, keep)
     }
 
+    /// [`Accel::any`] as [`Accel::closest`] dispatches.
     #[inline(always)]
     fn any<S: FastStack<UVec2>>(
         &self,
@@ -312,28 +431,65 @@ impl Accel {
         tmax: f32,
         keep: impl Fn(u32, Vec2) -> bool,
     ) -> bool {
-        let ray = Ray::new(Vec3A::from(origin), positive_zeros(dir), 0.0, tmax);
-        let mut state = Walk::new(stack, ray.direction, self.bvh.nodes.is_empty());
-        let mut node;
-        let mut hit = false;
-        'walk: {
-            obvhs::traverse!(
-                self.bvh,
-                node,
-                state,
-                node.intersect_ray(&ray, state.oct_inv4),
-                {
-                    let id = state.primitive_id;
-                    if let Some((_, n, det)) = hit_triangle(&self.tris[id as usize], &ray) {
-                        if keep(id, n / det) {
-                            hit = true;
-                            break 'walk;
-                        }
-                    }
-                }
-            );
+        #[cfg(target_arch = "x86_64")]
+        if has_avx2() {
+            // SAFETY: the CPU has AVX2, all the function asks
+            #[allow(unsafe_code)]
+            return unsafe { self.any_avx2(stack, origin, dir, tmax, keep) };
         }
-        hit
+        self.any_sse(stack, origin, dir, tmax, keep)
+    }
+
+    /// The closest-hit walk with AVX2 node tests ([`node_hits_avx2`]), compiled for AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn closest_avx2<S: FastStack<UVec2>>(
+        &self,
+        stack: &mut S,
+        origin: Vec3,
+        dir: Vec3,
+        tmax: f32,
+        keep: impl Fn(u32, Vec2) -> bool,
+    ) -> Option<Hit> {
+        closest_walk!(self, stack, origin, dir, tmax, keep, node_hits_avx2)
+    }
+
+    /// The any-hit walk with AVX2 node tests, compiled for AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn any_avx2<S: FastStack<UVec2>>(
+        &self,
+        stack: &mut S,
+        origin: Vec3,
+        dir: Vec3,
+        tmax: f32,
+        keep: impl Fn(u32, Vec2) -> bool,
+    ) -> bool {
+        any_walk!(self, stack, origin, dir, tmax, keep, node_hits_avx2)
+    }
+
+    #[inline(always)]
+    fn closest_sse<S: FastStack<UVec2>>(
+        &self,
+        stack: &mut S,
+        origin: Vec3,
+        dir: Vec3,
+        tmax: f32,
+        keep: impl Fn(u32, Vec2) -> bool,
+    ) -> Option<Hit> {
+        closest_walk!(self, stack, origin, dir, tmax, keep, node_hits)
+    }
+
+    #[inline(always)]
+    fn any_sse<S: FastStack<UVec2>>(
+        &self,
+        stack: &mut S,
+        origin: Vec3,
+        dir: Vec3,
+        tmax: f32,
+        keep: impl Fn(u32, Vec2) -> bool,
+    ) -> bool {
+        any_walk!(self, stack, origin, dir, tmax, keep, node_hits)
     }
 
     /// Closest hit by testing every triangle: the reference for tests and benchmarks.
@@ -353,5 +509,67 @@ impl Accel {
             }
         }
         best
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{rngs::SmallRng, Rng, SeedableRng};
+
+    /// The AVX2 node test gives obvhs's mask, bit for bit, on every node of a BVH over random
+    /// triangles, for rays of every octant (signed zeros included) and short and long `tmax`:
+    /// the claim that makes images bit-identical whichever test the CPU runs.
+    #[test]
+    #[cfg(target_arch = "x86_64")]
+    fn the_avx2_node_test_gives_obvhs_mask() {
+        if !has_avx2() {
+            return;
+        }
+        let mut rng = SmallRng::seed_from_u64(49);
+        let mut p = || Vec3::new(rng.random(), rng.random(), rng.random()) * 4.0 - 2.0;
+        let tris: Vec<[Vec3; 3]> = (0..500)
+            .map(|_| {
+                let c = p();
+                [c, c + p() * 0.1, c + p() * 0.1]
+            })
+            .collect();
+        let accel = Accel::build(&tris);
+        assert!(accel.bvh.nodes.len() > 10);
+        let mut rng = SmallRng::seed_from_u64(7);
+        let (mut checked, mut some_hit) = (0, 0);
+        for i in 0..2000 {
+            let o = Vec3::new(rng.random(), rng.random(), rng.random()) * 6.0 - 3.0;
+            // half the rays aimed at a triangle, so that deep nodes are hit too
+            let mut d = Vec3::new(rng.random(), rng.random(), rng.random()) * 2.0 - 1.0;
+            if i % 2 == 0 {
+                d = tris[rng.random_range(0..tris.len())][0] - o;
+            }
+            if i % 7 == 0 {
+                d.y = if i % 2 == 0 { 0.0 } else { -0.0 };
+            }
+            let d = positive_zeros(d.normalize_or(Vec3::X));
+            let tmax = if i % 3 == 0 {
+                rng.random::<f32>() * 2.0
+            } else {
+                f32::INFINITY
+            };
+            let ray = Ray::new(Vec3A::from(o), d, 0.0, tmax);
+            let oct_inv4 = Walk::new(&mut HeapStack::new_with_capacity(1), d, false).oct_inv4;
+            for node in &accel.bvh.nodes {
+                let want = node.intersect_ray(&ray, oct_inv4);
+                // SAFETY: the CPU has AVX2 (checked above)
+                #[allow(unsafe_code)]
+                let got = unsafe { node_hits_avx2(node, &ray, oct_inv4) };
+                assert_eq!(got, want, "ray {i}");
+                checked += 1;
+                some_hit += (want != 0) as usize;
+            }
+        }
+        // the comparison meant something: masks of both kinds were compared
+        assert!(
+            some_hit > checked / 50 && some_hit < checked,
+            "{some_hit} of {checked}"
+        );
     }
 }
