@@ -17,7 +17,12 @@ What it does, in order (every step prints what it found):
            tests; the check passes when every |z| < 4 (Bonferroni for a family error of 1% on a
            normal gives 3.7; 4 allows for the t tails of 16 passes). Mitsuba renders with a box
            pixel filter (its default is a Gaussian), so both estimate the same pixel integral.
-3. speed   Samples per second at equal spp (``--spp``, ``--runs`` runs each): vrpt's own render
+3. speed   Samples per second at equal spp (``--spp``, ``--runs`` runs each, the contestants
+           taken in turn, run 0 of each, then run 1 of each, so a drift of the shared machine's
+           speed falls on all alike; vrpt's speed against Mitsuba's is the median of the pairwise
+           ratios of the same run), and the MSE of each as the mean over its runs with its
+           standard error (a median of three heavy-tailed MSEs once read 1.2x where eight seeds
+           read 0.99x): vrpt's own render
            time (recorded in its EXR; scene loading and the BVH build are outside it) against
            the wall time of ``mi.render`` with the scene loaded and its kernel compiled by a
            warm-up render of the same configuration.
@@ -26,8 +31,8 @@ What it does, in order (every step prints what it found):
            at ``--spp``), rounded as each sampler wants it (a square for vrpt's stratified, a
            power of two for Sobol and Mitsuba's ldsampler, p^2 for orthogonal), ``--runs`` runs with other seeds. The MSE is against the mean of the
            two references (whose own noise is printed next to it), and is reported scaled to the
-           budget, MSE * t / budget, so a render that ran 3% long is not favoured; median and
-           min..max over the runs.
+           budget, MSE * t / budget, so a render that ran 3% long is not favoured; mean and standard
+           error over the runs, the contestants again taken in turn.
 
 Needs: ``pip install -r tools/peers/requirements.txt`` (mitsuba, numpy); the ``llvm_ad_rgb``
 variant also needs LLVM's shared library (Debian: ``apt install libllvm19``), else the script
@@ -51,6 +56,24 @@ import sys
 import time
 
 import numpy as np
+
+
+def newest_llvm():
+    """The newest versioned libLLVM in the system's library folders: Dr.Jit looks only for
+    an unversioned libLLVM.so, which Debian's libllvm19 does not install (and LLVM 15, which
+    it found here, crashed in the JIT)."""
+    import glob
+    import re
+    found = []
+    for f in glob.glob("/usr/lib/*/libLLVM-*.so") + glob.glob("/usr/lib/libLLVM-*.so"):
+        m = re.search(r"libLLVM-(\d+)\.so$", f)
+        if m:
+            found.append((int(m.group(1)), f))
+    return max(found)[1] if found else None
+
+
+if "DRJIT_LIBLLVM_PATH" not in os.environ and newest_llvm():
+    os.environ["DRJIT_LIBLLVM_PATH"] = newest_llvm()
 
 try:
     import mitsuba as mi
@@ -293,6 +316,30 @@ def summary(values):
     return statistics.median(values), min(values), max(values)
 
 
+def mean_se(values):
+    """The mean of `values` and its standard error (the runs are independent)."""
+    n = len(values)
+    m = float(np.mean(values))
+    return m, (float(np.std(values, ddof=1)) / math.sqrt(n) if n > 1 else float("nan"))
+
+
+def ratio_se(a, b):
+    """a/b of two independent (mean, standard error) pairs and the ratio's standard error
+    (first order: relative errors add in quadrature)."""
+    r = a[0] / b[0]
+    return r, r * math.sqrt((a[1] / a[0]) ** 2 + (b[1] / b[0]) ** 2)
+
+
+def interleaved(contestants, runs, render):
+    """Every contestant's `runs` renders, taken in turn (run 0 of each, then run 1 of each, ...)
+    so that a drift of the machine's speed falls on all alike: {label: [render(...)...]}."""
+    out = {label: [] for label, _, _ in contestants}
+    for r in range(runs):
+        for label, who, s in contestants:
+            out[label].append(render(label, who, s, r))
+    return out
+
+
 # ------------------------------------------------------------------------------------ main
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
@@ -302,17 +349,19 @@ def main():
     ap.add_argument("--size", type=int, default=256)
     ap.add_argument("--spp", type=int, default=64, help="spp of the equal-spp speed runs")
     ap.add_argument("--max-depth", type=int, default=8)
-    ap.add_argument("--runs", type=int, default=5)
+    ap.add_argument("--runs", type=int, default=None, help="runs per contestant (default 5; 3 with --quick)")
     ap.add_argument("--ref-spp", type=int, default=4096)
     ap.add_argument("--ref-passes", type=int, default=16)
     ap.add_argument("--budget", type=float, default=None, help="equal-time budget, seconds")
     ap.add_argument("--quick", action="store_true",
-                    help="1024-spp references in 8 passes, 3 runs")
+                    help="1024-spp references in 8 passes, 3 runs unless --runs says")
     ap.add_argument("--fresh", action="store_true", help="render the references again")
     ap.add_argument("--export-only", action="store_true")
     a = ap.parse_args()
     if a.quick:
-        a.ref_spp, a.ref_passes, a.runs = 1024, 8, 3
+        a.ref_spp, a.ref_passes = 1024, 8
+        a.runs = a.runs or 3
+    a.runs = a.runs or 5
     if a.ref_spp % a.ref_passes:
         sys.exit("mitsuba_race.py: --ref-spp must be a multiple of --ref-passes")
 
@@ -369,69 +418,73 @@ def main():
     print(f"race reference: the mean of both; its own noise (MSE vs truth) ~ {ref_noise:.3g}")
 
     # ---- 3. samples/s at equal spp
-    print(f"\n== samples/s and MSE at {a.spp} spp, {a.runs} runs (median, min..max)")
-    speed = {}
+    print(f"\n== samples/s and MSE at {a.spp} spp, {a.runs} runs each, contestants in turn "
+          "(samples/s: median, min..max; MSE: mean +- standard error)")
     contestants = [(f"Mitsuba {variant} {s}", "mitsuba", s) for s in MITSUBA_SAMPLERS]
     contestants += [(label, "vrpt", s) for label, s in VRPT_STRATEGIES]
-    for label, who, s in contestants:
-        rates, errs = [], []
-        for r in range(a.runs):
-            if who == "mitsuba":
-                img, t, n = mitsuba.render(s, a.spp, 100 + r)
-            else:
-                img, t, n = vrpt.render(s, a.spp, 100 + r)
-            rates.append(pixels * n / t / 1e6)
-            errs.append(mse(img, ref))
-        speed[label] = {"spp": n, "msamples_per_s": summary(rates), "mse": summary(errs)}
+    base = f"Mitsuba {variant} independent"
+    ours = VRPT_STRATEGIES[0][0]
+
+    def render(who, s, spp, seed):
+        return (mitsuba if who == "mitsuba" else vrpt).render(s, spp, seed)
+
+    runs = interleaved(contestants, a.runs, lambda _, who, s, r: render(who, s, a.spp, 100 + r))
+    speed = {}
+    for label, _, _ in contestants:
+        rates = [pixels * n / t / 1e6 for _, t, n in runs[label]]
+        errs = [mse(img, ref) for img, _, _ in runs[label]]
+        speed[label] = {"spp": runs[label][0][2], "msamples_per_s": summary(rates),
+                        "mse": mean_se(errs), "rates": rates}
         med, lo, hi = summary(rates)
-        print(f"  {label:42s} {n:5d} spp  {med:6.2f} M samples/s  ({lo:.2f}..{hi:.2f})  "
-              f"MSE {speed[label]['mse'][0]:.3g}", flush=True)
+        m, se = speed[label]["mse"]
+        print(f"  {label:42s} {speed[label]['spp']:5d} spp  {med:6.2f} M samples/s  "
+              f"({lo:.2f}..{hi:.2f})  MSE {m:.3g} +- {se:.2g}", flush=True)
+    # the speed ratio pair by pair (run r of both was taken minutes apart at most)
+    pair = [o / b for o, b in zip(speed[ours]["rates"], speed[base]["rates"])]
+    speed_ratio = summary(pair)
 
     # ---- 4. MSE at equal time
-    base = f"Mitsuba {variant} independent"
     budget = a.budget or pixels * a.spp / (speed[base]["msamples_per_s"][0] * 1e6)
-    print(f"\n== MSE at equal time: budget {budget:.3f} s, {a.runs} runs "
-          "(median, min..max; MSE * t / budget)")
+    print(f"\n== MSE at equal time: budget {budget:.3f} s, {a.runs} runs each, in turn "
+          "(MSE * t / budget: mean +- standard error)")
+    spp_of = {label: max(1, int(round(budget * speed[label]["msamples_per_s"][0] * 1e6 / pixels)))
+              for label, _, _ in contestants}
+    runs = interleaved(contestants, a.runs,
+                       lambda label, who, s, r: render(who, s, spp_of[label], 200 + r))
     race = {}
-    for label, who, s in contestants:
-        rate = speed[label]["msamples_per_s"][0] * 1e6
-        spp = max(1, int(round(budget * rate / pixels)))
-        errs, times = [], []
-        for r in range(a.runs):
-            if who == "mitsuba":
-                img, t, n = mitsuba.render(s, spp, 200 + r)
-            else:
-                img, t, n = vrpt.render(s, spp, 200 + r)
-            errs.append(mse(img, ref) * t / budget)
-            times.append(t)
-        race[label] = {"spp": n, "seconds": summary(times), "mse": summary(errs)}
-        med, lo, hi = summary(errs)
-        print(f"  {label:42s} {n:5d} spp  {statistics.median(times):6.3f} s  "
-              f"MSE {med:.4g} ({lo:.4g}..{hi:.4g})", flush=True)
+    for label, _, _ in contestants:
+        errs = [mse(img, ref) * t / budget for img, t, _ in runs[label]]
+        times = [t for _, t, _ in runs[label]]
+        race[label] = {"spp": runs[label][0][2], "seconds": summary(times), "mse": mean_se(errs)}
+        m, se = race[label]["mse"]
+        print(f"  {label:42s} {race[label]['spp']:5d} spp  {statistics.median(times):6.3f} s  "
+              f"MSE {m:.4g} +- {se:.2g}", flush=True)
 
     # ---- summary
     best_m = min((l for l, w, _ in contestants if w == "mitsuba" and l != base),
                  key=lambda l: race[l]["mse"][0])
-    ours = VRPT_STRATEGIES[0][0]
     print("\n| renderer | spp | M samples/s at equal spp | MSE at equal spp | "
           "MSE at equal time | vs Mitsuba independent |")
     print("|---|---:|---:|---:|---:|---:|")
     for label, _, _ in contestants:
-        m = race[label]["mse"][0]
+        r, rse = ratio_se(race[label]["mse"], race[base]["mse"])
         print(f"| {label} | {speed[label]['spp']} | {speed[label]['msamples_per_s'][0]:.2f} | "
-              f"{speed[label]['mse'][0]:.3g} | {m:.3g} | {m / race[base]['mse'][0]:.2f}x |")
-    print(f"\nvrpt mis / Mitsuba independent: samples/s "
-          f"{speed[ours]['msamples_per_s'][0] / speed[base]['msamples_per_s'][0]:.2f}x, "
-          f"equal-time MSE {race[ours]['mse'][0] / race[base]['mse'][0]:.2f}x; "
-          f"against Mitsuba's best sampler ({best_m}): "
-          f"{race[ours]['mse'][0] / race[best_m]['mse'][0]:.2f}x")
+              f"{speed[label]['mse'][0]:.3g} +- {speed[label]['mse'][1]:.2g} | "
+              f"{race[label]['mse'][0]:.3g} +- {race[label]['mse'][1]:.2g} | "
+              f"{r:.2f}x +- {rse:.2f} |")
+    eq, eq_se = ratio_se(race[ours]["mse"], race[base]["mse"])
+    best, best_se = ratio_se(race[ours]["mse"], race[best_m]["mse"])
+    print(f"\nvrpt mis / Mitsuba independent: samples/s {speed_ratio[0]:.2f}x "
+          f"(pairwise median, {speed_ratio[1]:.2f}..{speed_ratio[2]:.2f}), "
+          f"equal-time MSE {eq:.2f}x +- {eq_se:.2f}; "
+          f"against Mitsuba's best sampler ({best_m}): {best:.2f}x +- {best_se:.2f}")
     results = {
         "vrpt": version, "mitsuba": mi.__version__, "variant": variant, "cpus": os.cpu_count(),
         "size": a.size, "max_depth": a.max_depth, "runs": a.runs, "spp": a.spp,
         "ref_spp": a.ref_spp, "ref_passes": a.ref_passes, "budget_seconds": budget,
         "agreement": {"max_abs_z": worst, "agree": agree,
                       "relative_mean_difference": rel.tolist(), "reference_noise": ref_noise},
-        "speed": speed, "equal_time": race,
+        "speed": speed, "speed_ratio": speed_ratio, "equal_time": race,
     }
     with open(os.path.join(a.out, "results.json"), "w") as out:
         json.dump(results, out, indent=2)
