@@ -4,7 +4,7 @@
 //! heuristic `w(p_light, p_bsdf)` under `mis`, `p_bsdf` the pdf with which the bounce's own
 //! direction strategy (the guided mixture where there is a guide) would have drawn `ωᵢ`.
 
-use super::{mis_weight, timed, Path, RayCounts, Vertex};
+use super::{mis_weight, timed, Path, Phase, RayCounts, Vertex};
 use crate::accel::TraceStack;
 use crate::bsdf::Bsdf;
 use crate::guiding::GuideAt;
@@ -33,13 +33,16 @@ impl Path<'_> {
             return None;
         }
         let (scene, settings) = (self.scene, self.settings);
-        let ls = self.lights.sample(v.p, v.ns, u.light, u.light_point)?;
+        let ls = self.lights.sample(v.p, v.ns, u.light, u.light_point);
+        rays.mark(Phase::Light);
+        let ls = ls?;
         let wi_local = v.frame.to_local(ls.wi);
         // light from below the geometric surface cannot arrive (as for BSDF samples)
         if !(ls.wi.dot(v.ng) > 0.0 && wi_local.z > 0.0) {
             return None;
         }
         let f = bsdf.eval(v.wo_local, wi_local);
+        rays.mark(Phase::Bsdf);
         if f.max_element() > 0.0 {
             let (to, tmax) = if ls.dist.is_finite() {
                 let y = v.p + ls.wi * ls.dist;
@@ -50,11 +53,12 @@ impl Path<'_> {
                 (ls.wi, f32::INFINITY)
             };
             rays.shadow += 1;
-            if tmax > 0.0
-                && !timed(settings.time_traces, rays, || {
+            let blocked = tmax <= 0.0
+                || timed(settings.time_traces, rays, || {
                     scene.occluded(stack, v.spawn, to, tmax)
-                })
-            {
+                });
+            rays.mark(Phase::Shadow);
+            if !blocked {
                 let w = match settings.lights {
                     LightStrategy::Mis => {
                         let p = bsdf.pdf(v.wo_local, wi_local, settings.directions) * share;
@@ -63,6 +67,7 @@ impl Path<'_> {
                     }
                     _ => 1.0,
                 };
+                rays.mark(Phase::Bsdf);
                 return Some(beta * f * ls.le * (wi_local.z * w / ls.pdf));
             }
         }

@@ -78,6 +78,44 @@ pub struct IntegratorSettings {
     pub time_traces: bool,
 }
 
+/// The parts a path sample's cost is split into when it is timed phase by phase
+/// ([`RayCounts::start_path`]): each clock read ends the phase it names, so the phases tile the
+/// sample's time with no gap.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Phase {
+    /// The sampler's start of the pixel sample, the pixel point and the camera ray.
+    Camera,
+    /// Closest-hit traversals (camera and bounce rays), and the environment where one misses.
+    Trace,
+    /// The surface point, its emission (with its MIS weight), material, BSDF and shading frame.
+    Shade,
+    /// The bounce's sample values.
+    Sampler,
+    /// A light sample's choice of light and its point on it.
+    Light,
+    /// Shadow rays.
+    Shadow,
+    /// BSDF evaluation and pdf for the light sample, and the bounce's direction.
+    Bsdf,
+    /// The sample added to its pixel's sums.
+    Film,
+}
+
+/// How many [`Phase`]s there are.
+pub const PHASES: usize = 8;
+
+/// The phases' names in `--stats`, in [`Phase`] order.
+pub const PHASE_NAMES: [&str; PHASES] = [
+    "camera", "trace", "shade", "sampler", "light", "shadow", "bsdf", "film",
+];
+
+/// With timing on, one path sample in this many is timed phase by phase (about 30 clock reads
+/// of ~20 ns each on a Cornell-box path of ~1 µs: one in 61 costs ~1 %). Counted over a tile's
+/// paths, and a prime, so that the timed ones fall on every sample index of a pixel alike: the
+/// first sample of a pixel's pass builds the stratified sampler's tables, and timing only those
+/// read the sampler at 1.7 µs a sample.
+pub const TIMED_PATH_EVERY: u64 = 61;
+
 /// Rays traced, by kind.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct RayCounts {
@@ -91,6 +129,16 @@ pub struct RayCounts {
     pub trace_ns: u64,
     /// How many traversals were timed.
     pub timed: u64,
+    /// Nanoseconds of each [`Phase`] in the path samples timed phase by phase.
+    pub phase_ns: [u64; PHASES],
+    /// Clock reads that ended each phase (each carries the clock's own cost).
+    pub phase_reads: [u64; PHASES],
+    /// Path samples timed phase by phase.
+    pub paths_timed: u64,
+    /// Path samples started (the count [`RayCounts::start_path`] picks by).
+    paths_started: u64,
+    /// The clock at the last phase's end, while a path is timed.
+    lap: Option<std::time::Instant>,
 }
 
 impl RayCounts {
@@ -106,6 +154,57 @@ impl RayCounts {
         self.shadow += o.shadow;
         self.trace_ns += o.trace_ns;
         self.timed += o.timed;
+        for k in 0..PHASES {
+            self.phase_ns[k] += o.phase_ns[k];
+            self.phase_reads[k] += o.phase_reads[k];
+        }
+        self.paths_timed += o.paths_timed;
+        self.paths_started += o.paths_started;
+    }
+
+    /// A path sample starts: timed phase by phase when `on` and it is a [`TIMED_PATH_EVERY`]-th
+    /// one; [`RayCounts::mark`] then ends each phase and [`RayCounts::end_path`] the path.
+    #[inline(always)]
+    pub fn start_path(&mut self, on: bool) {
+        self.paths_started += 1;
+        if on && self.paths_started.is_multiple_of(TIMED_PATH_EVERY) {
+            self.lap = Some(std::time::Instant::now());
+            self.paths_timed += 1;
+        }
+    }
+
+    /// End `phase` of a timed path (nothing on a path not timed): the time since the last
+    /// phase ended goes to it, capped at 10 µs (longer is the thread descheduled).
+    #[inline(always)]
+    pub fn mark(&mut self, phase: Phase) {
+        if let Some(last) = self.lap {
+            let now = std::time::Instant::now();
+            let k = phase as usize;
+            self.phase_ns[k] += ((now - last).as_nanos() as u64).min(MAX_TRACE_NS);
+            self.phase_reads[k] += 1;
+            self.lap = Some(now);
+        }
+    }
+
+    /// End a timed path with its [`Phase::Film`].
+    #[inline(always)]
+    pub fn end_path(&mut self) {
+        self.mark(Phase::Film);
+        self.lap = None;
+    }
+
+    /// Nanoseconds per path sample in each [`Phase`], from the paths timed phase by phase, the
+    /// clock's own cost ([`clock_overhead_ns`], one read per phase end) subtracted; `None`
+    /// when no path was timed.
+    pub fn phase_ns_per_sample(&self) -> Option<[f64; PHASES]> {
+        if self.paths_timed == 0 {
+            return None;
+        }
+        let read = clock_overhead_ns();
+        Some(std::array::from_fn(|k| {
+            (self.phase_ns[k] as f64 - self.phase_reads[k] as f64 * read).max(0.0)
+                / self.paths_timed as f64
+        }))
     }
 
     /// Estimated time in BVH traversal: the timed rays' time, less the clock's own cost inside
@@ -160,7 +259,8 @@ pub fn clock_overhead_ns() -> f64 {
 /// [`TIMED_RAY_EVERY`]-th ray.
 #[inline(always)]
 fn timed<T>(on: bool, rays: &mut RayCounts, f: impl FnOnce() -> T) -> T {
-    if on && rays.total().is_multiple_of(TIMED_RAY_EVERY) {
+    // not inside a path timed phase by phase: its clock reads would land in the phase
+    if on && rays.total().is_multiple_of(TIMED_RAY_EVERY) && rays.lap.is_none() {
         let start = std::time::Instant::now();
         let r = f();
         // an interval longer than any traversal is the thread being descheduled: scaled by
@@ -337,9 +437,11 @@ impl<'a> Path<'a> {
             } else {
                 &mut rays.bounce
             } += 1;
-            let Some(hit) = timed(settings.time_traces, rays, || {
+            let hit = timed(settings.time_traces, rays, || {
                 scene.intersect(stack, origin, dir, f32::INFINITY)
-            }) else {
+            });
+            rays.mark(Phase::Trace);
+            let Some(hit) = hit else {
                 let w = self.emission_weight(prev, |v| self.lights.environment_pdf(v.n, dir));
                 l += beta * scene.environment().radiance(dir) * w;
                 break;
@@ -351,6 +453,7 @@ impl<'a> Path<'a> {
                 l += beta * le * w;
             }
             if segment == settings.max_depth {
+                rays.mark(Phase::Shade);
                 break;
             }
             let bsdf = scene.bsdf_at(&s);
@@ -368,6 +471,7 @@ impl<'a> Path<'a> {
             if bsdf.is_black() {
                 break;
             }
+            rays.mark(Phase::Shade);
             // values this bounce cannot use are skipped, not drawn (the same image, fewer hashes)
             let u = BounceSample::draw_needed(
                 sampler,
@@ -376,12 +480,16 @@ impl<'a> Path<'a> {
                 segment >= RR_START_BOUNCE,
                 settings.directions == Directions::Guided,
             );
+            rays.mark(Phase::Sampler);
             let v = Vertex::new(scene, &s, front, wo);
             let g = self.guide.map(|t| GuideAt::new(t, s.p));
+            rays.mark(Phase::Shade);
             if let Some(d) = self.next_event(&v, (&bsdf, 1.0), g.as_ref(), &u, beta, rays, stack) {
                 l += d;
             }
-            let Some((wi, bs, mix)) = self.sample_direction(&v, &bsdf, g.as_ref(), &u) else {
+            let sampled = self.sample_direction(&v, &bsdf, g.as_ref(), &u);
+            rays.mark(Phase::Bsdf);
+            let Some((wi, bs, mix)) = sampled else {
                 break;
             };
             if wi.dot(v.ng) <= 0.0 {

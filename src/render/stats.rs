@@ -3,6 +3,7 @@
 //! time between tracing and shading.
 
 use super::*;
+use crate::integrator::{PHASES, PHASE_NAMES, TIMED_PATH_EVERY};
 
 /// Counts and times of one render.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -102,10 +103,67 @@ impl RenderStats {
             );
         }
         s.push('\n');
+        if let Some(line) = self.cost_per_sample() {
+            s += &line;
+        }
         if let Some(g) = &self.guide {
             s += &g.summary();
         }
         s
+    }
+
+    /// The cost model: nanoseconds of thread time per path sample in each phase of the paths
+    /// timed phase by phase (one in [`TIMED_PATH_EVERY`]), and each phase per event where it
+    /// has one (trace per closest-hit ray, shadow per shadow ray, shade per vertex). The clock's
+    /// own cost is taken out twice over: as measured in an empty loop, then, where the phases
+    /// still sum to more than the render's thread time per sample, the rest in proportion to
+    /// each phase's clock reads (the clock costs more amid a path's work than in a loop of its
+    /// own), so the phases sum to the thread time. `None` without timing.
+    pub fn cost_per_sample(&self) -> Option<String> {
+        let mut ns = self.rays.phase_ns_per_sample()?;
+        let samples = self.samples.max(1) as f64;
+        let per_thread = self.thread_time.as_secs_f64() * 1e9 / samples;
+        // The clock costs more inside a path than in the empty loop that measured it: what the
+        // phases sum to beyond the thread time per sample is that extra, taken from each phase
+        // in proportion to its clock reads
+        let reads: Vec<f64> = (0..PHASES)
+            .map(|k| self.rays.phase_reads[k] as f64 / self.rays.paths_timed as f64)
+            .collect();
+        let excess = ns.iter().sum::<f64>() - per_thread;
+        if excess > 0.0 {
+            let per_read = excess / reads.iter().sum::<f64>().max(1.0);
+            for k in 0..PHASES {
+                ns[k] = (ns[k] - reads[k] * per_read).max(0.0);
+            }
+        }
+        let closest = (self.rays.camera + self.rays.bounce) as f64 / samples;
+        let shadow = self.rays.shadow as f64 / samples;
+        let per = |k: usize, events: f64, what: &str| {
+            if events > 0.0 {
+                format!(" ({:.0} per {what})", ns[k] / events)
+            } else {
+                String::new()
+            }
+        };
+        let parts: Vec<String> = (0..PHASES)
+            .map(|k| {
+                let extra = match k {
+                    1 => per(k, closest, "ray"),
+                    2 => per(k, closest, "hit"),
+                    5 => per(k, shadow, "ray"),
+                    _ => String::new(),
+                };
+                format!("{} {:.0}{extra}", PHASE_NAMES[k], ns[k])
+            })
+            .collect();
+        Some(format!(
+            "cost per sample, ns ({} paths timed, one in {TIMED_PATH_EVERY}; {:.0} thread-ns per \
+             sample, of which the clock's extra cost {:.0} taken out): {}\n",
+            self.rays.paths_timed,
+            per_thread,
+            excess.max(0.0),
+            parts.join(", "),
+        ))
     }
 
     /// The summary lines `vrpt render` prints: size, spp, strategy, time, rates and rays.

@@ -213,10 +213,12 @@ impl<'a, F: SamplerFactory> Kernel<'a, F> {
                 return None;
             }
             // below SAMPLE_INDICES (checked by camera_for): a u32
+            tile.rays.start_path(self.integrator.time_traces);
             sampler.start_pixel_sample(pixel, index as u32);
             let ray = self
                 .camera
                 .generate_ray(pixel, CameraSample::draw(sampler).pixel);
+            tile.rays.mark(crate::integrator::Phase::Camera);
             let l = radiance_guided(
                 self.scene,
                 ray,
@@ -235,6 +237,7 @@ impl<'a, F: SamplerFactory> Kernel<'a, F> {
             } else {
                 tile.nonfinite += 1;
             }
+            tile.rays.end_path();
         }
         tile.samples += range.end - range.start;
         Some((sum, sum_sq, n))

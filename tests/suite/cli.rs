@@ -473,6 +473,28 @@ fn stats_report_the_time_split_and_change_no_pixel() {
         line.contains("BVH build") && line.contains("thread-seconds"),
         "{line}"
     );
+    // the cost model: every phase named with its ns per sample; traversal and shadow rays,
+    // which every path of the lit box has, cost something; the phases sum to at most the
+    // thread time per sample (what is over it is the clock's, taken out)
+    let cost = timed
+        .lines()
+        .find(|l| l.starts_with("cost per sample, ns ("))
+        .unwrap_or_else(|| panic!("no cost line: {timed}"));
+    let number_after = |key: &str| -> f64 {
+        let rest = &cost[cost.find(key).unwrap_or_else(|| panic!("{key}: {cost}")) + key.len()..];
+        let end = rest
+            .find(|c: char| !c.is_ascii_digit())
+            .unwrap_or(rest.len());
+        rest[..end]
+            .parse()
+            .unwrap_or_else(|_| panic!("{key}: {cost}"))
+    };
+    let phases = vrpt::integrator::PHASE_NAMES.map(|p| number_after(&format!(" {p} ")));
+    let per_sample = number_after("; ");
+    assert!(phases[1] > 0.0 && phases[5] > 0.0, "{cost}");
+    let sum: f64 = phases.iter().sum();
+    // each printed number is rounded to 1 ns
+    assert!(sum <= per_sample + 8.0, "{sum} > {per_sample}: {cost}");
     let read = |p: &Path| {
         exr::prelude::read_first_rgba_layer_from_file(
             p,
