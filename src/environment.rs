@@ -57,7 +57,62 @@ impl Default for Environment {
     }
 }
 
+/// Size of the [`Environment::studio`] map (lat-long, texels).
+const STUDIO_SIZE: (u32, u32) = (128, 64);
+/// The studio's ambient radiance, the same from every direction.
+const STUDIO_AMBIENT: f32 = 0.5;
+/// Angular radius of the studio's key light (radians: 8°).
+const STUDIO_KEY_RADIUS: f32 = 0.14;
+/// What the key light adds to a white diffuse surface facing it: `ρ·E/π` with ρ = 1, so
+/// `E = π·STUDIO_KEY_GAIN` (a surface facing it reads 0.5 + 0.6, one facing away 0.5).
+const STUDIO_KEY_GAIN: f32 = 0.6;
+
 impl Environment {
+    /// The light of a scene that brings none of its own (no emitters, or emitters that light
+    /// nothing the camera sees): an even grey sky of radiance 0.5 and one soft key light, a
+    /// disc of 8° radius toward `key` (unit, world space) whose irradiance at normal incidence
+    /// is `0.6π`. Under a uniform sky alone a white object is lit exactly as bright as the sky
+    /// behind it and vanishes (the white furnace); the key light shades its faces by their
+    /// angle to it and casts shadows, so its shape shows. A lat-long map, importance-sampled as
+    /// any `[environment] map`: the disc's texels carry its radiance `0.6π/Ω` (Ω the disc's
+    /// exact solid angle on the map's texels), so it is found by light samples, not by chance.
+    pub fn studio(key: Vec3) -> Environment {
+        let (w, h) = STUDIO_SIZE;
+        let key = key.normalize_or(Vec3::Y);
+        let cos_r = STUDIO_KEY_RADIUS.cos();
+        // texel centres in the map's convention (module doc), and each row's solid angle
+        let dir = |x: u32, y: u32| {
+            let (phi, theta) = (
+                2.0 * PI * ((x as f32 + 0.5) / w as f32 - 0.5),
+                PI * (y as f32 + 0.5) / h as f32,
+            );
+            let (st, ct) = theta.sin_cos();
+            let (sp, cp) = phi.sin_cos();
+            Vec3::new(st * sp, ct, -st * cp)
+        };
+        let texel_sr = |y: u32| {
+            let (t0, t1) = (PI * y as f32 / h as f32, PI * (y + 1) as f32 / h as f32);
+            (2.0 * PI / w as f32) * (t0.cos() - t1.cos())
+        };
+        let in_key = |x: u32, y: u32| dir(x, y).dot(key) >= cos_r;
+        let omega: f32 = (0..h)
+            .flat_map(|y| (0..w).map(move |x| (x, y)))
+            .filter(|&(x, y)| in_key(x, y))
+            .map(|(_, y)| texel_sr(y))
+            .sum();
+        let l_key = if omega > 0.0 {
+            PI * STUDIO_KEY_GAIN / omega
+        } else {
+            0.0
+        };
+        let pixels: Vec<Vec3> = (0..h)
+            .flat_map(|y| (0..w).map(move |x| (x, y)))
+            .map(|(x, y)| Vec3::splat(STUDIO_AMBIENT + if in_key(x, y) { l_key } else { 0.0 }))
+            .collect();
+        let map = EnvMap::new(w, h, &pixels, 0.0, 1.0).expect("the studio map is well formed");
+        Environment::Map(map)
+    }
+
     /// The radiance arriving along `-d` from direction `d` (unit, world space).
     #[inline]
     pub fn radiance(&self, d: Vec3) -> Vec3 {

@@ -22,8 +22,9 @@
 //!
 //! **The light** ([`too_dark`]): a scene whose emitters give the chosen view a mean direct
 //! brightness below [`DARK`] (an outdoor world whose only emitter is a small dim lamp, emitters
-//! hidden from everything the camera sees) is lit as a scene without emitters is, by a uniform
-//! white environment, and the loader says so.
+//! hidden from everything the camera sees) is lit as a scene without emitters is, by the studio
+//! light (`Environment::studio`: a grey sky and a key light from behind the camera), and the
+//! loader says so.
 
 use super::TriShading;
 use crate::accel::{Accel, TraceStack};
@@ -168,7 +169,7 @@ fn light_at(
 
 /// The camera of a scene without a description, looking at the box `(lo, hi)`: `outside` (the
 /// default view) unless at most half its rays hit a front face and the scene has emitters (one
-/// without is lit from outside, by the white environment, and two-sided shading shows the backs
+/// without is lit from outside, by the studio light, and two-sided shading shows the backs
 /// of surfaces as well as their fronts); then the inside view whose direct light is brightest,
 /// if it is brighter than the outside's (module doc). Also the chosen view's survey.
 pub fn choose_camera(

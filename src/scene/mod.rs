@@ -7,7 +7,8 @@
 //! two-sided: the integrator flips the shading frame to the side the ray arrives from.
 //! Without a description the camera frames the bounding box from +z, or stands inside where
 //! that view shows the backs of surfaces; a scene with no emitter, or whose emitters light
-//! almost nothing the camera sees, gets a uniform white environment (radiance 1), so any OBJ
+//! almost nothing the camera sees, gets a studio light ([`Environment::studio`]: a grey sky and a
+//! key light from behind the camera), so any OBJ
 //! renders visibly ([`auto`]).
 
 pub mod auto;
@@ -170,21 +171,32 @@ impl Scene {
                 (c, Some(s))
             }
         };
+        // the key light of a scene lit by the studio: from behind the camera, above and to
+        // its right, so the faces the camera sees are lit and shadows fall away from it
+        let key = {
+            let back = (camera.eye - camera.target).normalize_or(Vec3::Z);
+            let right = camera.up.cross(back).normalize_or(Vec3::X);
+            (back + camera.up.normalize_or(Vec3::Y) + 0.5 * right).normalize()
+        };
         let environment = options.environment.unwrap_or_else(|| {
             if emitters.is_empty() {
-                warnings.push("no emitters: lighting with a uniform white environment".into());
-                Environment::Constant(Vec3::ONE)
+                warnings.push(
+                    "no emitters: lighting with a grey sky and a key light from behind the camera \
+                     ([environment] in scene.toml chooses another)"
+                        .into(),
+                );
+                Environment::studio(key)
             } else if seen.as_ref().is_some_and(auto::too_dark) {
                 let power: f32 = emitters.iter().map(|e| e.power()).sum();
                 warnings.push(format!(
                     "the scene's {} emitting triangles (power {power:.3}) light almost nothing \
                      the camera sees (direct brightness {:.1e}): lighting it also with a \
-                     uniform white environment ([environment] radiance = [0, 0, 0] in \
-                     scene.toml keeps it dark)",
+                     grey sky and a key light from behind the camera ([environment] radiance = \
+                     [0, 0, 0] in scene.toml keeps it dark)",
                     emitters.len(),
                     seen.map_or(0.0, |s| s.direct)
                 ));
-                Environment::Constant(Vec3::ONE)
+                Environment::studio(key)
             } else {
                 Environment::Constant(Vec3::ZERO)
             }

@@ -187,8 +187,15 @@ fn a_white_furnace_through_glass_and_mirrors_stays_white() {
         ("fresnel-mirror", "newmtl m\nKd 0 0 0\nKs 1 1 1\nillum 5\n"),
     ] {
         let obj = format!("mtllib s.mtl\n{}", common::icosphere_obj(1.0, 2, "m"));
-        let f = folder(dir.path(), name, &[("s.obj", &obj), ("s.mtl", mtl)]);
-        let s = scene::load(&f.join("s.obj")).unwrap();
+        // the sky uniform and white (a scene without emitters is otherwise lit by the studio)
+        let toml = "obj = \"s.obj\"\n[environment]\nradiance = [1, 1, 1]\n";
+        let files = [
+            ("s.obj", obj.as_str()),
+            ("s.mtl", mtl),
+            ("scene.toml", toml),
+        ];
+        let f = folder(dir.path(), name, &files);
+        let s = scene::load(&f).unwrap();
         assert!(s.materials[0].specular.is_some(), "{name}");
         let (mean, img) = mean_luminance(&s, 24, 32, 64);
         let max = img.iter().map(|p| p.max_element()).fold(0.0f32, f32::max);
