@@ -63,14 +63,22 @@ impl SceneInfo {
         );
         out += &self.materials();
         let lights = &s.lights;
-        let power: f32 = lights.emitters.iter().map(|e| e.power()).sum();
+        // + 0.0: an empty sum of f32 is −0.0
+        let power = lights.emitters.iter().map(|e| e.power()).sum::<f32>() + 0.0;
         out += &format!(
             "emitters: {} (triangles and rectangles), total power {power:.4}\n",
             lights.emitters.len()
         );
         out += &match &lights.environment {
             Environment::Constant(c) => format!("environment: constant radiance {}\n", v(*c)),
-            Environment::Map(_) => "environment: an HDR map (see read:)\n".to_string(),
+            Environment::Map(m) => {
+                let (w, h) = m.size();
+                format!(
+                    "environment: a {w}×{h} lat-long map, ∫L dω = {:.4} (a file under read:, or \
+                     the studio light a warning names)\n",
+                    lights.environment.luminance_integral()
+                )
+            }
         };
         out += &format!("textures: {} loaded\n", s.textures.textures.len());
         let c = &s.camera;
