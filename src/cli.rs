@@ -139,7 +139,7 @@ impl Drop for Bar {
 fn run_render(args: RenderArgs) -> Result<ExitCode> {
     crate::GRACEFUL.store(true, std::sync::atomic::Ordering::SeqCst);
     let request = render::RenderRequest {
-        stop: Some(&crate::STOP),
+        stop: Some(crate::STOP.clone()),
         ..args.request
     };
     let job = request.prepare()?;
@@ -154,7 +154,8 @@ fn run_render(args: RenderArgs) -> Result<ExitCode> {
         } else {
             ""
         };
-        eprintln!("{}{timing}wrote {}", r.summary, r.output.display());
+        let wrote = r.output.as_ref().map(|p| p.display().to_string());
+        eprintln!("{}{timing}wrote {}", r.summary, wrote.unwrap_or_default());
     }
     warn(&r.warnings());
     Ok(ExitCode::from(if r.interrupted { 130 } else { 0 }))

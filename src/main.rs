@@ -5,10 +5,11 @@ mod cli;
 use clap::Parser;
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, LazyLock};
 
 /// Set by the first SIGINT/SIGTERM during a render: the render stops after its current batch
 /// of samples and writes what it has.
-pub static STOP: AtomicBool = AtomicBool::new(false);
+pub static STOP: LazyLock<Arc<AtomicBool>> = LazyLock::new(Default::default);
 /// Whether the command under way stops gracefully (a render); any other command, and a second
 /// signal, end the process at once.
 pub static GRACEFUL: AtomicBool = AtomicBool::new(false);

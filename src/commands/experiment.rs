@@ -218,7 +218,11 @@ fn write_tables<R: serde::Serialize, J: serde::Serialize>(
 
 /// How an experiment was made, for its report: scene, scene hash, reference, size, (the caller
 /// inserts the spp or time at 4), runs, seeds, strategies, max depth, vrpt version.
-fn settings_list<R>(p: &Prepared<R>, a: &ExperimentRequest) -> Vec<(String, String)> {
+fn settings_list<R>(
+    p: &Prepared<R>,
+    a: &ExperimentRequest,
+    entries: &[Entry],
+) -> Vec<(String, String)> {
     let reference_meta = RenderMetadata::radiance(&p.reference, &a.reference)
         .ok()
         .flatten()
@@ -226,7 +230,6 @@ fn settings_list<R>(p: &Prepared<R>, a: &ExperimentRequest) -> Vec<(String, Stri
             || "no vrpt metadata".into(),
             |m| format!("{} spp, {}", m.spp, m.strategy),
         );
-    let entries = a.entries().unwrap_or_default();
     let strategies: Vec<String> = entries.iter().map(|e| e.name.clone()).collect();
     let replicates = entries.first().map_or(1, |e| e.replicates);
     let seeds: Vec<String> = p.settings.run_seeds().iter().map(u64::to_string).collect();
@@ -295,11 +298,25 @@ impl Experiment for Prepared<CompareRequest> {
     }
 
     fn run(self, progress: &dyn Progress) -> Result<Outcome<Comparison>> {
+        self.run_with(Vec::new(), progress)
+    }
+}
+
+impl Prepared<CompareRequest> {
+    /// Run it with `custom` entries (samplers of the caller's own, [`Entry::custom`]) after the
+    /// strategies', and write its files.
+    pub fn run_with(
+        self,
+        custom: Vec<Entry>,
+        progress: &dyn Progress,
+    ) -> Result<Outcome<Comparison>> {
         let (req, a) = (&self.request, &self.request.experiment);
+        let mut entries = a.entries()?;
+        entries.extend(custom);
         let c = compare_entries(
             &self.scene,
             &self.reference,
-            &a.entries()?,
+            &entries,
             req.spp,
             req.equal_time
                 .map(|t| crate::limits::duration("--equal-time", t))
@@ -326,7 +343,7 @@ impl Experiment for Prepared<CompareRequest> {
                     format!("{} spp per run", req.spp),
                 ),
             };
-            let mut settings = settings_list(&self, a);
+            let mut settings = settings_list(&self, a, &entries);
             settings.insert(4, (key.into(), value));
             let names: Vec<String> = self
                 .settings
@@ -399,11 +416,25 @@ impl Experiment for Prepared<ConvergeRequest> {
     }
 
     fn run(self, progress: &dyn Progress) -> Result<Outcome<Convergence>> {
+        self.run_with(Vec::new(), progress)
+    }
+}
+
+impl Prepared<ConvergeRequest> {
+    /// Run it with `custom` entries (samplers of the caller's own, [`Entry::custom`]) after the
+    /// strategies', and write its files.
+    pub fn run_with(
+        self,
+        custom: Vec<Entry>,
+        progress: &dyn Progress,
+    ) -> Result<Outcome<Convergence>> {
         let (req, a) = (&self.request, &self.request.experiment);
+        let mut entries = a.entries()?;
+        entries.extend(custom);
         let c = converge_entries(
             &self.scene,
             &self.reference,
-            &a.entries()?,
+            &entries,
             &req.spp,
             &self.settings,
             progress,
@@ -420,7 +451,7 @@ impl Experiment for Prepared<ConvergeRequest> {
             written.push(Written::new(p));
         }
         if let Some(p) = &a.report {
-            let mut settings = settings_list(&self, a);
+            let mut settings = settings_list(&self, a, &entries);
             let spps: Vec<String> = req.spp.iter().map(u32::to_string).collect();
             settings.insert(4, ("spp".into(), spps.join(", ")));
             let title = format!(

@@ -116,6 +116,30 @@ impl RegionArgs {
     }
 }
 
+/// A command's request from its flags, parsed as the binary parses them (`args` without the
+/// command's name): the same defaults, checks and messages. A refusal is clap's message in one
+/// line, without its `error: ` and its usage hints (the Python binding's way in: keyword
+/// arguments become flags, so `vrpt.render(scene, spp=0)` says what `vrpt render SCENE --spp 0`
+/// says).
+pub fn parse_flags<T: clap::Args + clap::FromArgMatches>(
+    command: &'static str,
+    args: &[String],
+) -> Result<T> {
+    // clap's message up to its usage and help hints, its lines joined
+    let one_line = |e: clap::Error| {
+        let text = e.to_string();
+        let lines: Vec<&str> = (text.lines())
+            .take_while(|l| !l.starts_with("Usage:") && !l.starts_with("For more information"))
+            .map(str::trim)
+            .filter(|l| !l.is_empty())
+            .collect();
+        Error::Settings(lines.join(" ").trim_start_matches("error: ").to_string())
+    };
+    let cmd = T::augment_args(clap::Command::new(command).no_binary_name(true));
+    let matches = cmd.try_get_matches_from(args).map_err(one_line)?;
+    T::from_arg_matches(&matches).map_err(one_line)
+}
+
 /// The paths among `flags` that were given, each with its flag (for
 /// [`crate::image_io::check_outputs`]).
 pub(crate) fn given<'a>(

@@ -5,18 +5,21 @@
 use super::ImageArgs;
 use crate::analysis::plots::write_spp_map;
 use crate::error::{Error, Result};
-use crate::image_io::{check_image_path, check_outputs, Format, NamedPath};
+use crate::estimate::ErrorEstimate;
+use crate::film::Film;
+use crate::image_io::{check_image_path, check_outputs, check_writable, Format, NamedPath};
 use crate::limits::{parse_exposure, parse_gain, parse_seconds, parse_shard, parse_threads};
 use crate::output::{write_render, EstimateRecord, RenderMetadata};
 use crate::render::{
-    render_passes, shard_range, PassPlan, Progress, RenderSettings, RenderStats, Rendered,
-    ACTING_REPLICATES,
+    render_passes, render_passes_with, shard_range, PassPlan, Progress, RenderSettings,
+    RenderStats, Rendered, SamplerFactory, ACTING_REPLICATES,
 };
 use crate::scene::Scene;
 use crate::strategy::StrategyArgs;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// What to render and where to write it: `vrpt render`'s flags. Each `None` takes the scene's
@@ -69,7 +72,7 @@ pub struct RenderRequest {
     pub time_traces: bool,
     /// A flag that stops the render after its current batch (set by a signal handler).
     #[arg(skip)]
-    pub stop: Option<&'static AtomicBool>,
+    pub stop: Option<Arc<AtomicBool>>,
 }
 
 /// How a render estimates its error, and whether it acts on it (`vrpt render`'s flags).
@@ -110,7 +113,9 @@ pub struct PreparedRender {
     pub scene: Scene,
     pub settings: RenderSettings,
     pub plan: PassPlan,
-    pub output: PathBuf,
+    /// Where the image goes; `None`: nowhere, the render is kept in memory
+    /// ([`RenderRequest::prepare_in_memory`]).
+    pub output: Option<PathBuf>,
     /// Wall time of loading the scene (the BVH build included).
     pub load_time: Duration,
     /// The samples this render takes (relative to its first sample): all, or its shard's.
@@ -122,9 +127,10 @@ pub struct PreparedRender {
     shard: Option<(u32, u32)>,
 }
 
-/// What a render did.
+/// What a render did, and the image it made.
 pub struct RenderOutcome {
-    pub output: PathBuf,
+    /// The file written (`None` for a render kept in memory).
+    pub output: Option<PathBuf>,
     /// The settings, with the spp and first sample actually rendered.
     pub settings: RenderSettings,
     pub stats: RenderStats,
@@ -140,6 +146,12 @@ pub struct RenderOutcome {
     pub summary: String,
     /// Where the time went ([`RenderStats::timing`]).
     pub timing: String,
+    /// The image's sums (mean, variance of the mean, samples per pixel).
+    pub film: Film,
+    /// The image's estimated error.
+    pub estimate: ErrorEstimate,
+    /// The metadata an EXR of it records.
+    pub meta: RenderMetadata,
 }
 
 /// `SCENE-NAME.png` in the current folder (`render.png` for a bare `scene.toml`).
@@ -168,11 +180,35 @@ impl RenderRequest {
             .clone()
             .unwrap_or_else(|| default_output(&self.scene));
         let outputs = self.check_outputs(&output)?;
+        let prepared = self.load_and_resolve(Some(output.clone()))?;
+        // and the files the scene was read from
+        super::check_against_scene(&outputs, &prepared.scene)?;
+        Ok(prepared)
+    }
+
+    /// Load the scene and resolve the settings of a render that writes no file: its image stays
+    /// in the [`RenderOutcome`] (the Python binding's `vrpt.render`). The flags that name files
+    /// (`-o`, `--variance`, `--spp-map`) are refused.
+    pub fn prepare_in_memory(&self) -> Result<PreparedRender> {
+        self.strategy.resolve().map_err(Error::Settings)?;
+        let named = [
+            ("-o", &self.output),
+            ("--variance", &self.variance),
+            ("--spp-map", &self.error.spp_map),
+        ];
+        if let Some((flag, _)) = named.iter().find(|(_, p)| p.is_some()) {
+            return Err(Error::Settings(format!(
+                "{flag}: a render kept in memory writes no file (save it once it is done)"
+            )));
+        }
+        self.load_and_resolve(None)
+    }
+
+    /// Load the scene, resolve the settings and the passes.
+    fn load_and_resolve(&self, output: Option<PathBuf>) -> Result<PreparedRender> {
         let start = Instant::now();
         let scene = self.load.load(&self.scene)?;
         let load_time = start.elapsed();
-        // and the files the scene was read from
-        super::check_against_scene(&outputs, &scene)?;
         let settings = self.settings(&scene)?;
         let plan = self.plan(&settings)?;
         let samples = match self.shard {
@@ -261,7 +297,7 @@ impl RenderRequest {
                 .map(|t| crate::limits::duration("--time-limit", t))
                 .transpose()?,
             shard: self.shard,
-            stop: self.stop,
+            stop: self.stop.clone(),
             adaptive: self.error.adaptive,
             min_allocation_gain: self.error.min_allocation_gain,
             target_error: self.error.target_error,
@@ -290,14 +326,32 @@ impl RenderOutcome {
             ));
         }
         if self.interrupted {
-            w.push(format!(
-                "interrupted: wrote {} with the {} of {} spp taken (its metadata says so)",
-                self.output.display(),
-                self.settings.spp,
-                self.requested_spp
-            ));
+            let (spp, asked) = (self.settings.spp, self.requested_spp);
+            w.push(match &self.output {
+                Some(p) => format!(
+                    "interrupted: wrote {} with the {spp} of {asked} spp taken (its metadata \
+                     says so)",
+                    p.display()
+                ),
+                None => format!("interrupted: kept the {spp} of {asked} spp taken"),
+            });
         }
         w
+    }
+
+    /// Write the image as `vrpt render -o PATH --exposure EXPOSURE [--variance VARIANCE]`
+    /// would have: EXR (mean, variance of the mean, samples, estimated variance, metadata) or
+    /// PNG, each file written whole or not at all.
+    pub fn write(&self, path: &Path, exposure: f32, variance: Option<&Path>) -> Result<()> {
+        check_image_path(path)?;
+        check_writable(path)?;
+        write_render(
+            path,
+            (&self.film, Some(&self.estimate)),
+            &self.meta,
+            exposure,
+            variance,
+        )
     }
 }
 
@@ -310,6 +364,22 @@ impl PreparedRender {
     /// Render and write the image(s).
     pub fn run(self, progress: &dyn Progress) -> Result<RenderOutcome> {
         let r = render_passes(&self.scene, &self.settings, &self.plan, progress)?;
+        self.finish(r)
+    }
+
+    /// Render with the samplers `factory` makes (a sampler of the caller's own, see
+    /// [`crate::render::SamplerFactory`]) instead of the strategy's, and write the image(s).
+    pub fn run_with<F: SamplerFactory>(
+        self,
+        factory: &F,
+        progress: &dyn Progress,
+    ) -> Result<RenderOutcome> {
+        let r = render_passes_with(&self.scene, &self.settings, &self.plan, factory, progress)?;
+        self.finish(r)
+    }
+
+    /// The metadata of what rendered, the files written, and what to say.
+    fn finish(self, r: Rendered) -> Result<RenderOutcome> {
         let requested = self.samples.len() as u32;
         let asked_replicates = self.settings.replicates;
         let settings = RenderSettings {
@@ -331,13 +401,15 @@ impl PreparedRender {
             interrupted: r.interrupted,
             ..RenderMetadata::new(&self.scene, &settings, &r.stats)
         };
-        write_render(
-            &self.output,
-            (&r.film, Some(&r.estimate)),
-            &meta,
-            self.exposure,
-            self.variance.as_deref(),
-        )?;
+        if let Some(output) = &self.output {
+            write_render(
+                output,
+                (&r.film, Some(&r.estimate)),
+                &meta,
+                self.exposure,
+                self.variance.as_deref(),
+            )?;
+        }
         if let Some(p) = &self.spp_map {
             write_spp_map(p, &r.film.sample_counts(), (r.film.width, r.film.height))?;
         }
@@ -354,6 +426,9 @@ impl PreparedRender {
             missing_replicates: (r.finished_uniformly.is_none() && r.replicates < asked_replicates)
                 .then_some(asked_replicates),
             black: why_black(&self.scene, &r.film),
+            film: r.film,
+            estimate: r.estimate,
+            meta,
         })
     }
 }
@@ -452,4 +527,50 @@ fn adaptive_summary(r: &Rendered, bar: f64) -> String {
         );
     }
     text
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::commands::parse_flags;
+    use crate::render::NoProgress;
+
+    fn flags(args: &[&str]) -> Vec<String> {
+        args.iter().map(|s| s.to_string()).collect()
+    }
+
+    /// The Python binding's way in: flags parsed as the binary parses them, a refusal in one
+    /// line; a render kept in memory refuses the flags that name files, and holds the image it
+    /// would have written.
+    #[test]
+    fn a_render_from_flags_kept_in_memory() {
+        let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/cornell-box");
+        let bad = parse_flags::<RenderRequest>("render", &flags(&[scene, "--spp", "0"]));
+        let message = bad.expect_err("--spp 0 is refused").to_string();
+        assert!(
+            message.contains("'--spp <SPP>'") && !message.contains('\n'),
+            "{message}"
+        );
+        let unknown = parse_flags::<RenderRequest>("render", &flags(&[scene, "--no-such-flag"]));
+        assert!(unknown.is_err());
+        let args = [
+            scene, "--spp", "2", "--width", "6", "--height", "4", "--seed", "7",
+        ];
+        let request = parse_flags::<RenderRequest>("render", &flags(&args)).unwrap();
+        assert_eq!((request.image.spp, request.seed), (Some(2), 7));
+        let r = request
+            .prepare_in_memory()
+            .unwrap()
+            .run(&NoProgress)
+            .unwrap();
+        assert_eq!(r.output, None);
+        assert_eq!((r.film.width, r.film.height, r.meta.spp), (6, 4, 2));
+        assert!(r.film.mean_image().iter().any(|p| p.max_element() > 0.0));
+        let to_file = RenderRequest {
+            output: Some("x.png".into()),
+            ..request
+        };
+        let refused = to_file.prepare_in_memory().err().expect("-o is refused");
+        assert!(refused.to_string().contains("-o"), "{refused}");
+    }
 }

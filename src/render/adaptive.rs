@@ -226,7 +226,7 @@ impl<F: SamplerFactory> Job<'_, F> {
             }
             Some(films)
         };
-        if let Some(films) = render(&counts, self.plan.stop, stats) {
+        if let Some(films) = render(&counts, self.plan.stop.as_deref(), stats) {
             return Some(Round {
                 size,
                 counts,
@@ -274,7 +274,7 @@ impl<F: SamplerFactory> Job<'_, F> {
             pass_spp: (self.plan.pass_spp).or(Some(
                 crate::sampler::stratifiable(rest).min(u32::MAX as u64) as u32,
             )),
-            ..*self.plan
+            ..self.plan.clone()
         };
         let job = Job {
             settings: &settings,

@@ -29,6 +29,7 @@ use glam::{DVec3, UVec2};
 use rayon::prelude::*;
 use std::ops::Range;
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 mod adaptive;
@@ -274,7 +275,7 @@ struct Guiding<'a> {
 }
 
 /// How a render is split into passes, which part of it is rendered, and when it stops.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Debug, Default)]
 pub struct PassPlan {
     /// Samples per pixel per pass (the stratification unit); `None`: one pass of all the spp.
     pub pass_spp: Option<u32>,
@@ -283,9 +284,10 @@ pub struct PassPlan {
     /// Render only shard `i` of `n`: the samples `⌊i·spp/n⌋ .. ⌊(i+1)·spp/n⌋` of the render,
     /// with the render's passes (a shard may begin or end inside a pass).
     pub shard: Option<(u32, u32)>,
-    /// A flag that, once set (by a signal handler), stops the render after the current batch
-    /// of samples; the render is then cut into batches of about [`BATCH_SECONDS`].
-    pub stop: Option<&'static AtomicBool>,
+    /// A flag that, once set (by a signal handler, or by the Python binding on Ctrl-C), stops
+    /// the render after the current batch of samples; the render is then cut into batches of
+    /// about [`BATCH_SECONDS`]. Shared, so each render can have its own.
+    pub stop: Option<Arc<AtomicBool>>,
     /// Adaptive sampling: rounds whose samples go where the estimated relative error is
     /// ([`crate::estimate`]); needs at least 2 replicates, and no shard.
     pub adaptive: bool,
@@ -515,7 +517,10 @@ struct Job<'a, F: SamplerFactory> {
 
 impl<F: SamplerFactory> Job<'_, F> {
     fn stopped(&self) -> bool {
-        self.plan.stop.is_some_and(|f| f.load(Ordering::Relaxed))
+        self.plan
+            .stop
+            .as_ref()
+            .is_some_and(|f| f.load(Ordering::Relaxed))
     }
 
     /// Render the samples `samples` of every tile into `film` with replicate `rep`'s seed,

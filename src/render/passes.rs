@@ -170,7 +170,13 @@ impl<F: SamplerFactory> Job<'_, F> {
         };
         let all = span.end - span.start;
         let mut film = Film::new(w, h);
-        let (rate, cut) = self.batch(p.rep, samples(all), self.plan.stop, &mut film, stats);
+        let (rate, cut) = self.batch(
+            p.rep,
+            samples(all),
+            self.plan.stop.as_deref(),
+            &mut film,
+            stats,
+        );
         if !cut {
             return PassOutput {
                 film,

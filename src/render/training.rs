@@ -35,7 +35,11 @@ impl<F: SamplerFactory> Trainer<'_, F> {
                     .plan
                     .time_limit
                     .is_some_and(|t| start.elapsed() + 2 * last > t / 3);
-                let stopped = self.plan.stop.is_some_and(|f| f.load(Ordering::Relaxed));
+                let stopped = self
+                    .plan
+                    .stop
+                    .as_ref()
+                    .is_some_and(|f| f.load(Ordering::Relaxed));
                 if g.training_spp + spp > budget || over_time || stopped {
                     break;
                 }
@@ -89,7 +93,7 @@ impl<F: SamplerFactory> Trainer<'_, F> {
                     let batch = Batch {
                         samples: Samples::Pass { set, range },
                         tiles: tiles.clone(),
-                        stop: self.plan.stop,
+                        stop: self.plan.stop.as_deref(),
                     };
                     kernel.render(&batch, None)
                 })

@@ -10,6 +10,7 @@ use glam::Vec3;
 use std::path::Path;
 use std::process::{Command, Output, Stdio};
 use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 use vrpt::image_io::read_exr;
 use vrpt::output::RenderMetadata;
@@ -148,15 +149,15 @@ fn bad_shards_are_refused_with_one_line() {
 /// per pixel, the first of the pass (= shard 0 of 37 of the same render).
 #[test]
 fn batches_do_not_change_a_pixel() {
-    static NEVER: AtomicBool = AtomicBool::new(false);
-    static ALWAYS: AtomicBool = AtomicBool::new(true);
-    static CUT: AtomicBool = AtomicBool::new(false);
-    /// Sets CUT once the first batch (one sample of 240 pixels) and one tile of the rest are in.
-    struct CutAfter(std::sync::atomic::AtomicU64);
+    let never = Arc::new(AtomicBool::new(false));
+    let always = Arc::new(AtomicBool::new(true));
+    /// Sets its flag once the first batch (one sample of 240 pixels) and one tile of the rest
+    /// are in.
+    struct CutAfter(std::sync::atomic::AtomicU64, Arc<AtomicBool>);
     impl vrpt::render::Progress for CutAfter {
         fn advance(&self, units: u64) {
             if self.0.fetch_add(units, std::sync::atomic::Ordering::SeqCst) + units > 240 {
-                CUT.store(true, std::sync::atomic::Ordering::SeqCst);
+                self.1.store(true, std::sync::atomic::Ordering::SeqCst);
             }
         }
     }
@@ -178,21 +179,21 @@ fn batches_do_not_change_a_pixel() {
             ..RenderSettings::default()
         };
         let (whole, _) = render(&scene, &settings, &NoProgress).unwrap();
-        let plan = |stop: &'static AtomicBool| PassPlan {
-            stop: Some(stop),
+        let plan = |stop: &Arc<AtomicBool>| PassPlan {
+            stop: Some(stop.clone()),
             ..PassPlan::default()
         };
-        let r = render_passes(&scene, &settings, &plan(&NEVER), &NoProgress).unwrap();
+        let r = render_passes(&scene, &settings, &plan(&never), &NoProgress).unwrap();
         assert_eq!((r.spp, r.first_sample, r.interrupted), (37, 0, false));
         assert_eq!(r.film.mean_image(), whole.mean_image(), "{sampler}");
         assert_eq!(r.film.variance_image(), whole.variance_image(), "{sampler}");
-        CUT.store(false, std::sync::atomic::Ordering::SeqCst);
-        let progress = CutAfter(Default::default());
-        let r = render_passes(&scene, &settings, &plan(&CUT), &progress).unwrap();
-        assert!(CUT.load(std::sync::atomic::Ordering::SeqCst));
+        let cut = Arc::new(AtomicBool::new(false));
+        let progress = CutAfter(Default::default(), cut.clone());
+        let r = render_passes(&scene, &settings, &plan(&cut), &progress).unwrap();
+        assert!(cut.load(std::sync::atomic::Ordering::SeqCst));
         assert_eq!((r.spp, r.interrupted), (37, false), "{sampler}");
         assert_eq!(r.film.mean_image(), whole.mean_image(), "{sampler}");
-        let r = render_passes(&scene, &settings, &plan(&ALWAYS), &NoProgress).unwrap();
+        let r = render_passes(&scene, &settings, &plan(&always), &NoProgress).unwrap();
         assert_eq!((r.spp, r.interrupted), (1, true), "{sampler}");
         let first = PassPlan {
             shard: Some((0, 37)),
@@ -212,7 +213,6 @@ fn batches_do_not_change_a_pixel() {
 /// every one was equal).
 #[test]
 fn a_resume_after_a_cut_render_draws_new_points_and_merges() {
-    static ALWAYS: AtomicBool = AtomicBool::new(true);
     let scene = common::shipped("cornell-box");
     let settings = RenderSettings {
         width: 20,
@@ -222,7 +222,7 @@ fn a_resume_after_a_cut_render_draws_new_points_and_merges() {
         ..RenderSettings::default()
     };
     let cut_plan = PassPlan {
-        stop: Some(&ALWAYS),
+        stop: Some(Arc::new(AtomicBool::new(true))),
         ..PassPlan::default()
     };
     let cut = render_passes(&scene, &settings, &cut_plan, &NoProgress).unwrap();
