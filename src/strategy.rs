@@ -264,13 +264,50 @@ impl std::fmt::Display for Preset {
     }
 }
 
+/// What `--strategy` names: a preset, or `auto` (a render that chooses among candidate
+/// strategies by a pilot, [`crate::render::auto`]; `vrpt render` only).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum StrategyName {
+    /// A preset.
+    Preset(Preset),
+    /// Chosen per scene by a pilot.
+    Auto,
+}
+
+impl StrategyName {
+    const ALL: [StrategyName; 7] = [
+        StrategyName::Preset(Preset::Independent),
+        StrategyName::Preset(Preset::Stratified),
+        StrategyName::Preset(Preset::Importance),
+        StrategyName::Preset(Preset::Combined),
+        StrategyName::Preset(Preset::Nee),
+        StrategyName::Preset(Preset::Mis),
+        StrategyName::Auto,
+    ];
+}
+
+impl ValueEnum for StrategyName {
+    fn value_variants<'a>() -> &'a [Self] {
+        &Self::ALL
+    }
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        match self {
+            StrategyName::Preset(p) => p.to_possible_value(),
+            StrategyName::Auto => Some(clap::builder::PossibleValue::new("auto").help(
+                "chosen per scene: a pilot renders each candidate (--auto-candidates), the most \
+                 efficient by 1/(relMSE × cost) renders the image (vrpt render only)",
+            )),
+        }
+    }
+}
+
 /// How points, directions and lights are sampled, as the flags give it: a preset, or the axes
 /// separately (every command that renders takes these flags).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::Args)]
 pub struct StrategyArgs {
     /// A named strategy; a --sampler, --directions or --lights given too must agree with it.
     #[arg(long, value_enum)]
-    pub strategy: Option<Preset>,
+    pub strategy: Option<StrategyName>,
     /// Where sample points come from (default: stratified).
     #[arg(long, value_enum)]
     pub sampler: Option<SamplerKind>,
@@ -290,10 +327,43 @@ pub struct StrategyArgs {
 
 impl StrategyArgs {
     /// The strategy the flags ask for ([`Strategy::from_parts`]); an error if a flag
-    /// contradicts the preset.
+    /// contradicts the preset, or for `auto` (see [`StrategyArgs::is_auto`]).
     pub fn resolve(&self) -> Result<Strategy, String> {
+        let preset = match self.strategy {
+            Some(StrategyName::Auto) => {
+                return Err(
+                    "--strategy auto chooses the strategy by rendering: only vrpt \
+                            render takes it"
+                        .into(),
+                )
+            }
+            Some(StrategyName::Preset(p)) => Some(p),
+            None => None,
+        };
         let axes = (self.sampler, self.directions, self.lights);
-        Strategy::from_parts(self.strategy, axes, (self.light_points, self.light_choice))
+        Strategy::from_parts(preset, axes, (self.light_points, self.light_choice))
+    }
+
+    /// Whether the flags ask for `--strategy auto`; an error if they also set an axis (auto
+    /// chooses whole strategies: name the candidates instead).
+    pub fn is_auto(&self) -> Result<bool, String> {
+        if self.strategy != Some(StrategyName::Auto) {
+            return Ok(false);
+        }
+        let axes = [
+            ("sampler", self.sampler.is_some()),
+            ("directions", self.directions.is_some()),
+            ("lights", self.lights.is_some()),
+            ("light-points", self.light_points.is_some()),
+            ("light-choice", self.light_choice.is_some()),
+        ];
+        match axes.iter().find(|(_, given)| *given) {
+            Some((flag, _)) => Err(format!(
+                "--strategy auto chooses whole strategies, not --{flag}: name the candidates \
+                 with --auto-candidates"
+            )),
+            None => Ok(true),
+        }
     }
 }
 

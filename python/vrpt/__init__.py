@@ -247,6 +247,7 @@ def render(
     lights: Optional[str] = None,
     light_points: Optional[str] = None,
     light_choice: Optional[str] = None,
+    auto_candidates: Union[None, str, Sequence[str]] = None,
     width: Optional[int] = None,
     height: Optional[int] = None,
     max_depth: Optional[int] = None,
@@ -267,8 +268,9 @@ def render(
     Each argument is the ``vrpt render`` flag of its name (``vrpt render --help`` says what each
     does); ``None`` takes the scene's ``[render]`` default, then vrpt's. ``strategy`` is a preset
     (``independent``, ``stratified``, ``importance``, ``combined``, ``nee``, ``mis``; default:
-    vrpt's default), and ``sampler``, ``directions`` (``guided`` for path guiding), ``lights``,
-    ``light_points``, ``light_choice`` set one part of it.
+    vrpt's default) or ``auto`` (a pilot chooses among ``auto_candidates``; what it measured is in
+    ``summary`` and ``metadata["auto"]``), and ``sampler``, ``directions`` (``guided`` for path
+    guiding), ``lights``, ``light_points``, ``light_choice`` set one part of it.
     ``sampler`` may also be a function of your own (see ``SamplerFunction``): slow, since Python
     draws every number, but rendered through the same entry as vrpt's samplers. ``shard`` is
     ``(i, n)``. The image is kept in memory; ``Render.save`` writes it.
@@ -283,6 +285,7 @@ def render(
         lights=lights,
         light_points=light_points,
         light_choice=light_choice,
+        auto_candidates=auto_candidates,
         width=width,
         height=height,
         max_depth=max_depth,

@@ -286,6 +286,7 @@ fn merged_metadata(inputs: &[MergeInput], merged: &MergedPixels) -> RenderMetada
         passes: Vec::new(),
         time_limit_seconds: None,
         image: None,
+        auto: None,
         shard: None,
         requested_spp: None,
         interrupted: inputs.iter().any(|i| i.meta.interrupted),

@@ -10,12 +10,13 @@ use crate::film::Film;
 use crate::image_io::{check_image_path, check_outputs, check_writable, Format, NamedPath};
 use crate::limits::{parse_exposure, parse_gain, parse_seconds, parse_shard, parse_threads};
 use crate::output::{write_render, EstimateRecord, RenderMetadata};
+use crate::render::auto::{self, Choice};
 use crate::render::{
     render_passes, render_passes_with, shard_range, PassPlan, Progress, RenderSettings,
     RenderStats, Rendered, SamplerFactory, ACTING_REPLICATES,
 };
 use crate::scene::Scene;
-use crate::strategy::StrategyArgs;
+use crate::strategy::{Strategies, Strategy, StrategyArgs};
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
@@ -58,6 +59,11 @@ pub struct RenderRequest {
     pub threads: Option<usize>,
     #[command(flatten)]
     pub strategy: StrategyArgs,
+    /// With --strategy auto: the strategies its pilot chooses from, comma-separated, the first
+    /// kept unless another is more efficient beyond the pilot's noise [default: mis,
+    /// stratified+guided+mis]
+    #[arg(long, value_name = "STRATEGIES", value_parser = Strategies::parse)]
+    pub auto_candidates: Option<Strategies>,
     #[command(flatten)]
     pub error: ErrorArgs,
     /// Exposure of the PNG, in stops (pixels × 2^EXPOSURE before tone mapping), within ±64.
@@ -125,6 +131,8 @@ pub struct PreparedRender {
     spp_map: Option<PathBuf>,
     time_limit: Option<f64>,
     shard: Option<(u32, u32)>,
+    /// `--strategy auto`'s candidates (`settings.strategy` is then the first, until chosen).
+    auto: Option<Vec<Strategy>>,
 }
 
 /// What a render did, and the image it made.
@@ -142,6 +150,8 @@ pub struct RenderOutcome {
     pub missing_replicates: Option<u32>,
     /// Why the image is black or nearly so, and what would light it (none where it is not).
     pub black: Option<String>,
+    /// What `--strategy auto`'s pilots measured and chose.
+    pub auto: Option<Choice>,
     /// The scene, the speed and the rays, in three lines ([`RenderStats::summary`]).
     pub summary: String,
     /// Where the time went ([`RenderStats::timing`]).
@@ -174,7 +184,7 @@ impl RenderRequest {
     /// Check the outputs, load the scene and resolve the settings.
     pub fn prepare(&self) -> Result<PreparedRender> {
         // contradictory flags first, before any file is read
-        self.strategy.resolve().map_err(Error::Settings)?;
+        self.candidates()?;
         let output = self
             .output
             .clone()
@@ -190,7 +200,7 @@ impl RenderRequest {
     /// in the [`RenderOutcome`] (the Python binding's `vrpt.render`). The flags that name files
     /// (`-o`, `--variance`, `--spp-map`) are refused.
     pub fn prepare_in_memory(&self) -> Result<PreparedRender> {
-        self.strategy.resolve().map_err(Error::Settings)?;
+        self.candidates()?;
         let named = [
             ("-o", &self.output),
             ("--variance", &self.variance),
@@ -227,6 +237,7 @@ impl RenderRequest {
             spp_map: self.error.spp_map.clone(),
             time_limit: self.time_limit,
             shard: self.shard,
+            auto: self.candidates()?,
         })
     }
 
@@ -265,6 +276,32 @@ impl RenderRequest {
         Ok(outputs)
     }
 
+    /// `--strategy auto`'s candidates (`None` for a render of one strategy); an error for
+    /// contradictory strategy flags.
+    fn candidates(&self) -> Result<Option<Vec<Strategy>>> {
+        if !self.strategy.is_auto().map_err(Error::Settings)? {
+            if self.auto_candidates.is_some() {
+                return Err(Error::Settings(
+                    "--auto-candidates: only --strategy auto chooses among candidates".into(),
+                ));
+            }
+            self.strategy.resolve().map_err(Error::Settings)?;
+            return Ok(None);
+        }
+        let c = (self.auto_candidates.clone()).map_or_else(auto::default_candidates, |c| c.0);
+        if c.is_empty() {
+            return Err(Error::Settings("--auto-candidates: no strategies".into()));
+        }
+        if self.shard.is_some() || self.error.adaptive {
+            return Err(Error::Settings(
+                "--strategy auto: not with --shard or --adaptive (the shards of one render, or \
+                 its rounds, could choose differently)"
+                    .into(),
+            ));
+        }
+        Ok(Some(c))
+    }
+
     /// The settings: the flags over the scene's defaults over the built-in ones; a target error
     /// without `--spp` caps at [`TARGET_ERROR_SPP_CAP`], and a render that acts on its error
     /// estimate takes [`ACTING_REPLICATES`] without `--replicates`.
@@ -274,7 +311,10 @@ impl RenderRequest {
         Ok(RenderSettings {
             first_sample: self.first_sample,
             seed: self.seed,
-            strategy: self.strategy.resolve().map_err(Error::Settings)?,
+            strategy: match self.candidates()? {
+                Some(c) => c[0],
+                None => self.strategy.resolve().map_err(Error::Settings)?,
+            },
             threads: self.threads,
             time_traces: self.time_traces,
             replicates: (self.error.replicates).unwrap_or(if acting {
@@ -362,9 +402,24 @@ impl PreparedRender {
     }
 
     /// Render and write the image(s).
-    pub fn run(self, progress: &dyn Progress) -> Result<RenderOutcome> {
+    pub fn run(mut self, progress: &dyn Progress) -> Result<RenderOutcome> {
+        let choice = self.choose()?;
         let r = render_passes(&self.scene, &self.settings, &self.plan, progress)?;
-        self.finish(r)
+        self.finish(r, choice)
+    }
+
+    /// With `--strategy auto`: render the pilots, take the strategy they choose, and leave the
+    /// render the time they did not use.
+    fn choose(&mut self) -> Result<Option<Choice>> {
+        let Some(candidates) = &self.auto else {
+            return Ok(None);
+        };
+        let choice = auto::choose(&self.scene, &self.settings, &self.plan, candidates)?;
+        self.settings.strategy = choice.strategy;
+        if let Some(t) = &mut self.plan.time_limit {
+            *t = t.saturating_sub(choice.elapsed);
+        }
+        Ok(Some(choice))
     }
 
     /// Render with the samplers `factory` makes (a sampler of the caller's own, see
@@ -374,12 +429,17 @@ impl PreparedRender {
         factory: &F,
         progress: &dyn Progress,
     ) -> Result<RenderOutcome> {
+        if self.auto.is_some() {
+            return Err(Error::Settings(
+                "--strategy auto renders with vrpt's own samplers, not a sampler of yours".into(),
+            ));
+        }
         let r = render_passes_with(&self.scene, &self.settings, &self.plan, factory, progress)?;
-        self.finish(r)
+        self.finish(r, None)
     }
 
     /// The metadata of what rendered, the files written, and what to say.
-    fn finish(self, r: Rendered) -> Result<RenderOutcome> {
+    fn finish(self, r: Rendered, auto: Option<Choice>) -> Result<RenderOutcome> {
         let requested = self.samples.len() as u32;
         let asked_replicates = self.settings.replicates;
         let settings = RenderSettings {
@@ -399,6 +459,7 @@ impl PreparedRender {
             shard: self.shard,
             requested_spp: (r.spp < requested).then_some(requested as u64),
             interrupted: r.interrupted,
+            auto: auto.as_ref().map(Choice::record),
             ..RenderMetadata::new(&self.scene, &settings, &r.stats)
         };
         if let Some(output) = &self.output {
@@ -415,8 +476,12 @@ impl PreparedRender {
         }
         let bar = (self.plan.min_allocation_gain).unwrap_or(crate::estimate::ALLOCATE_ABOVE);
         let adaptive = adaptive_summary(&r, bar);
+        let pilots = auto.as_ref().map_or(String::new(), Choice::table);
         Ok(RenderOutcome {
-            summary: r.stats.summary(&self.scene, &settings) + &adaptive + &r.estimate.summary(),
+            summary: pilots
+                + &r.stats.summary(&self.scene, &settings)
+                + &adaptive
+                + &r.estimate.summary(),
             timing: r.stats.timing(self.load_time, &self.scene),
             output: self.output,
             settings,
@@ -429,6 +494,7 @@ impl PreparedRender {
             film: r.film,
             estimate: r.estimate,
             meta,
+            auto,
         })
     }
 }

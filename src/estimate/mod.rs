@@ -271,6 +271,29 @@ pub fn image_error(width: u32, mean: &[Vec3], variance: &[Vec3]) -> (f64, f64) {
     (mse / n, rel / n)
 }
 
+/// The standard error of [`image_error`]'s relMSE: the spread of its terms `v̂/(r² + 0.01)` over
+/// pixels and channels over `√(3·pixels)`. The terms differ from pixel to pixel in their true
+/// values as well as by noise, so this overstates the noise of the estimate: a conservative
+/// margin for deciding between two estimates, not a calibrated error.
+pub fn rel_mse_standard_error(width: u32, mean: &[Vec3], variance: &[Vec3]) -> f64 {
+    let r2 = squared_reference(width, mean, variance);
+    let terms = variance
+        .iter()
+        .zip(&r2)
+        .flat_map(|(v, r2)| (0..3).map(move |c| v[c] as f64 / (r2[c] + REL_EPSILON)));
+    let (mut n, mut sum, mut sum_sq) = (0.0f64, 0.0f64, 0.0f64);
+    for t in terms {
+        n += 1.0;
+        sum += t;
+        sum_sq += t * t;
+    }
+    if n < 2.0 {
+        return f64::INFINITY;
+    }
+    let var = ((sum_sq - sum * sum / n) / (n - 1.0)).max(0.0);
+    (var / n).sqrt()
+}
+
 /// An estimate of each pixel's `r²` for the relMSE's denominator `r² + 0.01`, where the true
 /// image `r` is unknown: per channel `λF² + (1 − λ)B²`, with `B` the 3×3 box average of the
 /// mean `F` and `λ = F²/(F² + 16 v̂)`, so a pixel whose mean is already precise uses its own

@@ -265,6 +265,11 @@ pub const KEYS: &[Key] = &[
         read: |m, v| set(&mut m.image, v.text.map(String::from)),
     },
     Key {
+        name: "auto",
+        write: |m| m.auto.clone(),
+        read: |m, v| set(&mut m.auto, v.text.map(String::from)),
+    },
+    Key {
         name: "shard",
         write: |m| m.shard.map(|(i, n)| format!("{i}/{n}")),
         read: |m, v| {

@@ -55,6 +55,8 @@ pub struct RenderMetadata {
     pub merged_from: Option<String>,
     /// What the pixels are, when not the radiance (e.g. "variance of the mean").
     pub image: Option<String>,
+    /// `--strategy auto`'s choice and what its pilots measured ([`crate::render::auto::Choice::record`]).
+    pub auto: Option<String>,
     /// `(i, n)`: the render is shard `i` of `n` (`vrpt render --shard i/n`).
     pub shard: Option<(u32, u32)>,
     /// The spp asked for, when the render stopped before it (a time limit or a signal).
@@ -178,6 +180,7 @@ impl RenderMetadata {
             time_limit_seconds: None,
             merged_from: None,
             image: None,
+            auto: None,
             shard: None,
             requested_spp: None,
             interrupted: false,
@@ -270,6 +273,7 @@ impl RenderMetadata {
             time_limit_seconds: None,
             merged_from: None,
             image: None,
+            auto: None,
             shard: None,
             requested_spp: None,
             interrupted: false,

@@ -95,6 +95,7 @@ mod tests {
             time_limit_seconds: Some(0.5),
             merged_from: None,
             image: None,
+            auto: Some("chose mis; efficiency mis 1.000, stratified+guided+mis 0.83".into()),
             shard: Some((2, 4)),
             requested_spp: Some(128),
             interrupted: true,

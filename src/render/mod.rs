@@ -33,6 +33,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 mod adaptive;
+pub mod auto;
 mod passes;
 mod stats;
 mod tile;

@@ -5,6 +5,7 @@
 //! `cargo test --test suite cli::`.
 
 mod architecture;
+mod auto;
 mod cli;
 #[path = "../common/mod.rs"]
 mod common;

@@ -79,6 +79,35 @@ impl Entry<'static> {
     }
 }
 
+impl Entry<'static> {
+    /// `--strategy auto` among `candidates` (the first is the default; see
+    /// [`crate::render::auto`]), named "auto": every run renders the pilots with its own seed,
+    /// then the strategy they chose, and its time includes the pilots'.
+    pub fn auto(candidates: Vec<Strategy>) -> Entry<'static> {
+        Entry {
+            name: "auto".into(),
+            strategy: candidates.first().copied().unwrap_or_default(),
+            replicates: 1,
+            adaptive: false,
+            min_allocation_gain: None,
+            render: Box::new(move |scene, settings, plan| {
+                let choice = crate::render::auto::choose(scene, settings, plan, &candidates)?;
+                let settings = RenderSettings {
+                    strategy: choice.strategy,
+                    ..settings.clone()
+                };
+                let plan = PassPlan {
+                    time_limit: (plan.time_limit).map(|t| t.saturating_sub(choice.elapsed)),
+                    ..plan.clone()
+                };
+                let mut r = render_passes(scene, &settings, &plan, &NoProgress)?;
+                r.stats.elapsed += choice.elapsed;
+                Ok(r)
+            }),
+        }
+    }
+}
+
 impl<'a> Entry<'a> {
     /// A sampler of the caller's own (see [`SamplerFactory`]) with the direction and light
     /// parts of `strategy`, under `name`.
