@@ -17,6 +17,7 @@ import json
 import os
 import pathlib
 import platform
+import math
 import re
 import statistics
 import subprocess
@@ -367,7 +368,7 @@ def equal_time(scene, w, h, seconds, ref, configs, seeds=(1, 2, 3), metric="MSE"
     return {l: (statistics.mean(m), statistics.median(n), e) for l, (m, n, e) in got.items()}
 
 
-def equal_time_pairs(scene, w, h, seconds, configs, pairs=((1, 2), (3, 4))):
+def equal_time_pairs(scene, w, h, seconds, configs, pairs=((1, 2), (3, 4)), log=None):
     """{label: (relMSE, final spp, last stderr)} measured without a reference: each config
     rendered with `--time-limit` for two seeds of each pair (configs interleaved), and the
     relMSE of one render estimated as half the relMSE of one against the other
@@ -388,6 +389,8 @@ def equal_time_pairs(scene, w, h, seconds, configs, pairs=((1, 2), (3, 4))):
                 spps.append(int(re.search(r"at (\d+) spp", r.stderr).group(1)))
                 imgs.append(img)
                 err = r.stderr
+                if log is not None:
+                    log.append((label, r.stderr))
             d = vrpt("diff", imgs[0], imgs[1]).stdout
             rel = float(re.search(r"^relMSE \(eps 0.01\)\s+(\S+)", d, re.M).group(1)) / 2
             m, n, _ = got[label]
@@ -433,6 +436,37 @@ SHIPPED = ["cornell-box", "glossy-plates", "lit-checker", "checker-plane", "nigh
 ADAPTIVE_TARGETS = ([("glossy-plates", None, None, 3, 1.2), ("glossy-plates", None, None, 60, 2.0),
                      ("lit-checker", None, None, 30, 2.0)]
                     + [(s, None, None, 10, 2.0 if s == "glossy-plates" else 0.95) for s in SHIPPED])
+
+
+AUTO_SCENES = ["cornell-box", "glossy-plates", "lit-checker", "checker-plane", "night-hall", "door", "door-dark",
+               "gap", "sun-sky", "textured", "glass"]
+
+
+@section("auto")
+def auto():
+    """`--strategy auto` against its two candidates at equal time as a user renders (`--time-limit 10`,
+    pilots included), each shipped scene at its own size, relMSE from seed pairs."""
+    print("`vrpt render scenes/SCENE --spp 1048576 --time-limit 10 --seed S` with `--strategy mis`, "
+          "`--directions guided` or `--strategy auto` (candidates mis and stratified+guided+mis), seed pairs "
+          "(1, 2) and (3, 4), configs interleaved; relMSE of one render = half the relMSE of one against the "
+          "other; ratio above 1 means auto wins:\n")
+    configs = [("mis", ["--strategy", "mis"]), ("guided", ["--directions", "guided"]),
+               ("auto", ["--strategy", "auto"])]
+    rows, vs_mis, vs_best = [], [], []
+    for scene in AUTO_SCENES:
+        log = []
+        r = equal_time_pairs(scene, None, None, 10, configs, log=log)
+        chosen = [re.search(r"^  (\S+)\s.*<- chosen", e, re.M).group(1) for l, e in log if l == "auto"]
+        (mm, _, _), (mg, _, _), (ma, sa, _) = r["mis"], r["guided"], r["auto"]
+        vs_mis.append(mm / ma)
+        vs_best.append(min(mm, mg) / ma)
+        picks = ", ".join(f"{chosen.count(c)}× {c}" for c in sorted(set(chosen)))
+        rows.append([scene, g(mm), g(mg), f"{g(ma)} ({sa} spp)", picks, f"{mm / ma:.2f}×", f"{min(mm, mg) / ma:.2f}×"])
+    print(table(["scene", "mis relMSE", "guided relMSE", "auto relMSE", "auto chose", "mis / auto",
+                 "best / auto"], rows))
+    geo = math.exp(statistics.mean(math.log(x) for x in vs_mis))
+    print(f"\nGeometric mean of mis / auto: {geo:.2f}×; worst best / auto: {min(vs_best):.2f}× "
+          f"({AUTO_SCENES[vs_best.index(min(vs_best))]}).")
 
 
 @section("adaptive")
