@@ -414,3 +414,51 @@ fn time_limited_passes_double_while_the_time_allows() {
     render_passes_with(&scene, &two, &plan, &factory, &NoProgress).unwrap();
     assert!(seen.lock().unwrap().iter().all(|p| p.size == 4));
 }
+
+/// Requests from their flags (`commands::parse_flags`) and renders kept in memory.
+mod from_flags {
+    use crate::common;
+    use vrpt::commands::parse_flags;
+    use vrpt::commands::render::RenderRequest;
+    use vrpt::render::NoProgress;
+
+    fn flags(args: &[&str]) -> Vec<String> {
+        args.iter().map(|s| s.to_string()).collect()
+    }
+
+    /// The Python binding's way in: flags parsed as the binary parses them, a refusal in one
+    /// line; a render kept in memory refuses the flags that name files, and holds the image it
+    /// would have written.
+    #[test]
+    fn a_render_from_flags_kept_in_memory() {
+        let cornell = common::cornell_path();
+        let scene = cornell.to_str().unwrap();
+        let bad = parse_flags::<RenderRequest>("render", &flags(&[scene, "--spp", "0"]));
+        let message = bad.expect_err("--spp 0 is refused").to_string();
+        assert!(
+            message.contains("'--spp <SPP>'") && !message.contains('\n'),
+            "{message}"
+        );
+        let unknown = parse_flags::<RenderRequest>("render", &flags(&[scene, "--no-such-flag"]));
+        assert!(unknown.is_err());
+        let args = [
+            scene, "--spp", "2", "--width", "6", "--height", "4", "--seed", "7",
+        ];
+        let request = parse_flags::<RenderRequest>("render", &flags(&args)).unwrap();
+        assert_eq!((request.image.spp, request.seed), (Some(2), 7));
+        let r = request
+            .prepare_in_memory()
+            .unwrap()
+            .run(&NoProgress)
+            .unwrap();
+        assert_eq!(r.output, None);
+        assert_eq!((r.film.width, r.film.height, r.meta.spp), (6, 4, 2));
+        assert!(r.film.mean_image().iter().any(|p| p.max_element() > 0.0));
+        let to_file = RenderRequest {
+            output: Some("x.png".into()),
+            ..request
+        };
+        let refused = to_file.prepare_in_memory().err().expect("-o is refused");
+        assert!(refused.to_string().contains("-o"), "{refused}");
+    }
+}
