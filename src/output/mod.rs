@@ -75,9 +75,9 @@ mod tests {
     use super::*;
     use crate::strategy::Preset;
 
-    #[test]
-    fn attributes_round_trip_and_errors_name_the_key() {
-        let m = RenderMetadata {
+    /// Metadata with every kind of field set.
+    fn sample_metadata() -> RenderMetadata {
+        RenderMetadata {
             scene: "scenes/x".into(),
             scene_hash: 0xdead_beef_0123_4567,
             width: 4,
@@ -116,7 +116,12 @@ mod tests {
             }),
             adaptive_rounds: Some(6),
             target_error: Some(1e-3),
-        };
+        }
+    }
+
+    #[test]
+    fn attributes_round_trip_and_errors_name_the_key() {
+        let m = sample_metadata();
         let a = m.to_attributes();
         assert_eq!(a["strategy"], "importance");
         assert_eq!(RenderMetadata::from_attributes(&a).unwrap(), m);
@@ -131,22 +136,27 @@ mod tests {
             RenderMetadata::from_attributes(&merged.to_attributes()).unwrap(),
             merged
         );
-        let mut bad = a.clone();
-        bad.insert("spp".into(), "many".into());
-        assert!(RenderMetadata::from_attributes(&bad)
-            .unwrap_err()
-            .contains("'spp'"));
-        bad = a.clone();
-        bad.remove("max_depth");
-        assert!(RenderMetadata::from_attributes(&bad)
-            .unwrap_err()
-            .contains("'max_depth'"));
-        bad = a.clone();
-        bad.insert("sampler".into(), "nosuch".into());
-        assert!(RenderMetadata::from_attributes(&bad)
-            .unwrap_err()
-            .contains("sampler"));
-        // a recorded size that is not the image's is refused
+        // a malformed, missing or unknown value: the error names the key
+        let broken = [
+            ("spp", Some("many"), "'spp'"),
+            ("max_depth", None, "'max_depth'"),
+            ("sampler", Some("nosuch"), "sampler"),
+        ];
+        for (key, value, named) in broken {
+            let mut bad = a.clone();
+            match value {
+                Some(v) => bad.insert(key.into(), v.into()),
+                None => bad.remove(key),
+            };
+            let e = RenderMetadata::from_attributes(&bad).unwrap_err();
+            assert!(e.contains(named), "{key}: {e}");
+        }
+    }
+
+    /// A recorded size that is not the image's is refused.
+    #[test]
+    fn a_recorded_size_that_is_not_the_images_is_refused() {
+        let a = sample_metadata().to_attributes();
         let img = RgbImage {
             width: 2,
             height: 3,
