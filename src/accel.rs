@@ -170,7 +170,7 @@ const NODE_EPSILON: f32 = 0.0001;
 /// The children of `node` that `ray` (octant `oct_inv4`) hits, as the traversal's hit mask:
 /// obvhs's `intersect_ray_simd` with its 8 children in one 8-wide test instead of two 4-wide
 /// ones, each child plane's 8 quantized bytes widened to floats by two instructions (obvhs sets
-/// each lane from a scalar conversion). The arithmetic is the same, operation for operation
+/// each lane from a scalar conversion), and the mask assembled in the 8 lanes without a branch. The arithmetic is the same, operation for operation
 /// (a multiply, then an add, not a fused multiply-add; the same operand order of every `min`
 /// and `max`), so the mask is the same bits and so are the traversal and the image.
 #[cfg(target_arch = "x86_64")]
@@ -223,17 +223,20 @@ fn node_hits_avx2(node: &CwBvhNode, ray: &Ray, oct_inv4: u32) -> u32 {
     let tmax = _mm256_min_ps(tmax_x, _mm256_min_ps(tmax_y, tmax_z));
     let tmin = _mm256_max_ps(tmin, _mm256_set1_ps(NODE_EPSILON));
     let tmax = _mm256_min_ps(tmax, _mm256_set1_ps(ray.tmax));
-    let mut hits = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tmin, tmax)) as u32;
+    let hits = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_LE_OQ>(tmin, tmax));
+    // each hit child's bits shifted to its place (obvhs loops over the hit children: a branch
+    // per child), then the 8 lanes OR-ed together
     let (child_bits8, bit_index8) = node.get_child_and_index_bits(oct_inv4);
-    let mut mask = 0u32;
-    while hits != 0 {
-        let j = hits.trailing_zeros() as u64;
-        hits &= hits - 1;
-        let child_bits = ((child_bits8 >> (j * 8)) & 0xff) as u32;
-        let bit_index = ((bit_index8 >> (j * 8)) & 0xff) as u32;
-        mask |= child_bits << bit_index;
-    }
-    mask
+    let bytes = |v: u64| _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(v as i64));
+    let placed = _mm256_sllv_epi32(bytes(child_bits8), bytes(bit_index8));
+    let placed = _mm256_and_si256(placed, hits);
+    let half = _mm_or_si128(
+        _mm256_castsi256_si128(placed),
+        _mm256_extracti128_si256::<1>(placed),
+    );
+    let half = _mm_or_si128(half, _mm_shuffle_epi32::<0b01_00_11_10>(half));
+    let half = _mm_or_si128(half, _mm_shuffle_epi32::<0b10_11_00_01>(half));
+    _mm_cvtsi128_si32(half) as u32
 }
 
 /// The test of `RtTriangle::intersect` (the same arithmetic, so the same bits), returning the
