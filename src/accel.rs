@@ -109,7 +109,7 @@ macro_rules! take_group {
 /// compiled inside a function that enables AVX2 and its tests inline there.
 macro_rules! closest_walk {
     ($acc:expr, $stack:expr, $origin:expr, $dir:expr, $tmax:expr, $keep:expr, $nodes:path, $group:path) => {{
-        let mut ray = Ray::new(Vec3A::from($origin), positive_zeros($dir), 0.0, $tmax);
+        let mut ray = ray_of($origin, $dir, $tmax);
         let mut state = Walk::new($stack, ray.direction, $acc.bvh.nodes.is_empty());
         let mut node;
         // the closest hit so far: primitive, barycentric numerators, denominator
@@ -134,7 +134,7 @@ macro_rules! closest_walk {
 /// The any-hit walk (stops at the first kept hit), as [`closest_walk`].
 macro_rules! any_walk {
     ($acc:expr, $stack:expr, $origin:expr, $dir:expr, $tmax:expr, $keep:expr, $nodes:path, $group:path) => {{
-        let ray = Ray::new(Vec3A::from($origin), positive_zeros($dir), 0.0, $tmax);
+        let ray = ray_of($origin, $dir, $tmax);
         let mut state = Walk::new($stack, ray.direction, $acc.bvh.nodes.is_empty());
         let mut node;
         let mut hit = false;
@@ -474,6 +474,24 @@ fn group_any_avx2(
         }
     }
     false
+}
+
+/// The ray `origin + t·dir`, `t ∈ [0, tmax]`, as obvhs's `Ray::new` makes it from
+/// [`positive_zeros`]`(dir)`, its three `safe_inverse`s (`1/x`, or `signum(x)/ε` where
+/// `|x| ≤ ε`) done as one vector division and a select: the same values, bit for bit, without
+/// three scalar divisions and their branches per ray.
+#[inline(always)]
+fn ray_of(origin: Vec3, dir: Vec3, tmax: f32) -> Ray {
+    let direction = positive_zeros(dir);
+    let small = direction.abs().cmple(Vec3A::splat(f32::EPSILON));
+    let inv_direction = Vec3A::select(small, direction.signum() / f32::EPSILON, direction.recip());
+    Ray {
+        origin: Vec3A::from(origin),
+        direction,
+        inv_direction,
+        tmin: 0.0,
+        tmax,
+    }
 }
 
 /// `dir` with every −0.0 component made +0.0. obvhs inverts a zero component as
@@ -899,5 +917,41 @@ mod tests {
         // filter or missed
         assert!(hits > 20_000 && hits < 40_000, "{hits}");
         assert!(blocked > 20_000 && blocked < 40_000, "{blocked}");
+    }
+
+    /// [`ray_of`] makes obvhs's `Ray::new`, bit for bit, for directions with components of
+    /// every size (zero, below and at `f32::EPSILON`, subnormal, large) and both signs.
+    #[test]
+    fn rays_are_obvhs_rays() {
+        let values = [
+            0.0f32,
+            -0.0,
+            1e-40,
+            -1e-40,
+            f32::EPSILON,
+            -f32::EPSILON,
+            f32::EPSILON * 1.0001,
+            -f32::EPSILON * 1.0001,
+            1e-3,
+            -0.7,
+            0.5,
+            1.0,
+            -1.0,
+            3e5,
+        ];
+        let bits = |v: Vec3A| [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()];
+        for &x in &values {
+            for &y in &values {
+                for &z in &values {
+                    let d = Vec3::new(x, y, z);
+                    let want = Ray::new(Vec3A::ONE, positive_zeros(d), 0.0, 2.0);
+                    let got = ray_of(Vec3::ONE, d, 2.0);
+                    assert_eq!(bits(got.inv_direction), bits(want.inv_direction), "{d}");
+                    assert_eq!(bits(got.direction), bits(want.direction), "{d}");
+                    assert_eq!(bits(got.origin), bits(want.origin));
+                    assert_eq!((got.tmin, got.tmax), (want.tmin, want.tmax));
+                }
+            }
+        }
     }
 }
