@@ -2,7 +2,7 @@
 //! triangles, with the triangles stored in BVH leaf order so a hit indexes them directly.
 //!
 //! Triangles are obvhs's `RtTriangle` values (`v0`, `e1 = v0 − v1`, `e2 = v2 − v0`, and the
-//! normal `ng = e1 × e2`) stored in [`TriBlock`]s of 8, each coordinate a row of 8 lanes (48
+//! normal `ng = e1 × e2`) stored in `TriBlock`s of 8, each coordinate a row of 8 lanes (48
 //! bytes a triangle): the CWBVH hands the traversal a *group* of up to 24 triangles at
 //! consecutive indices (every leaf child of a node the ray hits), and with AVX2 a block's
 //! triangles are tested 8 at a time by the Möller–Trumbore test of obvhs (one triangle at a time
