@@ -1,0 +1,157 @@
+//! The accelerator's tests: the AVX2 node and triangle tests against the scalar ones, bit for
+//! bit, and rays as obvhs makes them.
+
+use super::*;
+use rand::{rngs::SmallRng, Rng, SeedableRng};
+
+/// `n` random triangles of edges up to `size` with corners in the cube [−2, 2]³ (seed `seed`).
+fn random_triangles(seed: u64, n: usize, size: f32) -> Vec<[Vec3; 3]> {
+    let mut rng = SmallRng::seed_from_u64(seed);
+    let mut p = || Vec3::new(rng.random(), rng.random(), rng.random()) * 4.0 - 2.0;
+    (0..n)
+        .map(|_| {
+            let c = p();
+            [c, c + p() * size, c + p() * size]
+        })
+        .collect()
+}
+
+/// The AVX2 node test gives obvhs's mask, bit for bit, on every node of a BVH over random
+/// triangles, for rays of every octant (signed zeros included) and short and long `tmax`:
+/// the claim that makes images bit-identical whichever test the CPU runs.
+#[test]
+#[cfg(target_arch = "x86_64")]
+fn the_avx2_node_test_gives_obvhs_mask() {
+    if !has_avx2() {
+        return;
+    }
+    let tris = random_triangles(49, 500, 0.1);
+    let accel = Accel::build(&tris);
+    assert!(accel.bvh.nodes.len() > 10);
+    let mut rng = SmallRng::seed_from_u64(7);
+    let (mut checked, mut some_hit) = (0, 0);
+    for i in 0..2000 {
+        let o = Vec3::new(rng.random(), rng.random(), rng.random()) * 6.0 - 3.0;
+        // half the rays aimed at a triangle, so that deep nodes are hit too
+        let mut d = Vec3::new(rng.random(), rng.random(), rng.random()) * 2.0 - 1.0;
+        if i % 2 == 0 {
+            d = tris[rng.random_range(0..tris.len())][0] - o;
+        }
+        if i % 7 == 0 {
+            d.y = if i % 2 == 0 { 0.0 } else { -0.0 };
+        }
+        let d = positive_zeros(d.normalize_or(Vec3::X));
+        let tmax = if i % 3 == 0 {
+            rng.random::<f32>() * 2.0
+        } else {
+            f32::INFINITY
+        };
+        let ray = Ray::new(Vec3A::from(o), d, 0.0, tmax);
+        let oct_inv4 = Walk::new(&mut HeapStack::new_with_capacity(1), d, false).oct_inv4;
+        for node in &accel.bvh.nodes {
+            let want = node.intersect_ray(&ray, oct_inv4);
+            // SAFETY: the CPU has AVX2 (checked above)
+            #[allow(unsafe_code)]
+            let got = unsafe { node_hits_avx2(node, &ray, oct_inv4) };
+            assert_eq!(got, want, "ray {i}");
+            checked += 1;
+            some_hit += (want != 0) as usize;
+        }
+    }
+    // the comparison meant something: masks of both kinds were compared
+    assert!(
+        some_hit > checked / 50 && some_hit < checked,
+        "{some_hit} of {checked}"
+    );
+}
+
+/// The AVX2 group test gives the scalar walk's hits, bit for bit: the same triangle, `t` and
+/// barycentrics for the closest hit and the same verdict for shadow rays, with and without
+/// a filter, on triangles that include exact duplicates (ties in `t`, where the order in
+/// which a group's triangles are taken decides) and rays that graze them.
+#[test]
+#[cfg(target_arch = "x86_64")]
+fn the_avx2_triangle_test_gives_the_scalar_hits() {
+    if !has_avx2() {
+        return;
+    }
+    let mut tris = random_triangles(4949, 700, 0.3);
+    let copies: Vec<[Vec3; 3]> = tris.iter().step_by(5).copied().collect();
+    tris.extend(copies);
+    let accel = Accel::build(&tris);
+    let mut rng = SmallRng::seed_from_u64(11);
+    let mut stack = TraceStack::default();
+    let (mut hits, mut blocked) = (0, 0);
+    for i in 0..20_000 {
+        let o = Vec3::new(rng.random(), rng.random(), rng.random()) * 6.0 - 3.0;
+        let t = tris[rng.random_range(0..tris.len())];
+        // aimed at a vertex, an edge's midpoint or a random point of a triangle
+        let target = match i % 3 {
+            0 => t[0],
+            1 => (t[1] + t[2]) * 0.5,
+            _ => t[0] + (t[1] - t[0]) * rng.random::<f32>() * 0.5 + (t[2] - t[0]) * 0.4,
+        };
+        let d = (target - o).normalize_or(Vec3::X);
+        let tmax = if i % 4 == 0 { 3.0 } else { f32::INFINITY };
+        let keep_all = |_: u32, _: Vec2| true;
+        let keep_some = |prim: u32, b: Vec2| !prim.is_multiple_of(3) && b.x < 0.8;
+        for keep in [&keep_all as &dyn Fn(u32, Vec2) -> bool, &keep_some] {
+            // SAFETY: the CPU has AVX2 (checked above)
+            #[allow(unsafe_code)]
+            let (wide, wide_any) = unsafe {
+                (
+                    accel.closest_avx2(&mut stack.0, o, d, tmax, keep),
+                    accel.any_avx2(&mut stack.0, o, d, tmax, keep),
+                )
+            };
+            let scalar = accel.closest_sse(&mut stack.0, o, d, tmax, keep);
+            let scalar_any = accel.any_sse(&mut stack.0, o, d, tmax, keep);
+            let bits =
+                |h: Option<Hit>| h.map(|h| (h.prim, h.t.to_bits(), h.b1.to_bits(), h.b2.to_bits()));
+            assert_eq!(bits(wide), bits(scalar), "ray {i}");
+            assert_eq!(wide_any, scalar_any, "ray {i}");
+            hits += wide.is_some() as u32;
+            blocked += wide_any as u32;
+        }
+    }
+    // the comparison meant something: most aimed rays hit, and some were refused by the
+    // filter or missed
+    assert!(hits > 20_000 && hits < 40_000, "{hits}");
+    assert!(blocked > 20_000 && blocked < 40_000, "{blocked}");
+}
+
+/// [`ray_of`] makes obvhs's `Ray::new`, bit for bit, for directions with components of
+/// every size (zero, below and at `f32::EPSILON`, subnormal, large) and both signs.
+#[test]
+fn rays_are_obvhs_rays() {
+    let values = [
+        0.0f32,
+        -0.0,
+        1e-40,
+        -1e-40,
+        f32::EPSILON,
+        -f32::EPSILON,
+        f32::EPSILON * 1.0001,
+        -f32::EPSILON * 1.0001,
+        1e-3,
+        -0.7,
+        0.5,
+        1.0,
+        -1.0,
+        3e5,
+    ];
+    let bits = |v: Vec3A| [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()];
+    for &x in &values {
+        for &y in &values {
+            for &z in &values {
+                let d = Vec3::new(x, y, z);
+                let want = Ray::new(Vec3A::ONE, positive_zeros(d), 0.0, 2.0);
+                let got = ray_of(Vec3::ONE, d, 2.0);
+                assert_eq!(bits(got.inv_direction), bits(want.inv_direction), "{d}");
+                assert_eq!(bits(got.direction), bits(want.direction), "{d}");
+                assert_eq!(bits(got.origin), bits(want.origin));
+                assert_eq!((got.tmin, got.tmax), (want.tmin, want.tmax));
+            }
+        }
+    }
+}

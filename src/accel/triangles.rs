@@ -1,0 +1,243 @@
+//! The triangles in blocks of 8 (`TriBlock`) and the tests of a traversal's group of them: one
+//! at a time (obvhs's Möller–Trumbore test), and a block's 8 at once with AVX2, the same bits.
+
+use super::Accel;
+use glam::{Vec2, Vec3A};
+use obvhs::{ray::Ray, rt_triangle::RtTriangle};
+
+/// The test of `RtTriangle::intersect` (the same arithmetic, so the same bits), returning the
+/// hit's `t` and the numerators of its barycentrics and their denominator, or `None`.
+#[inline(always)]
+pub(super) fn hit_triangle(tri: &Tri, ray: &Ray) -> Option<(f32, Vec2, f32)> {
+    let c = tri.v0 - ray.origin;
+    let r = ray.direction.cross(c);
+    let det = tri.ng.dot(ray.direction);
+    let inv_det = 1.0 / det;
+    let (nu, nv) = (r.dot(tri.e2), r.dot(tri.e1));
+    let u = nu * inv_det;
+    let v = nv * inv_det;
+    let w = 1.0 - u - v;
+    let signs = u.to_bits() | v.to_bits() | w.to_bits();
+    if inv_det != 0.0 && signs & 0x8000_0000 == 0 {
+        let t = tri.ng.dot(c) * inv_det;
+        if t >= ray.tmin && t <= ray.tmax {
+            return Some((t, Vec2::new(nu, nv), det));
+        }
+    }
+    None
+}
+
+/// One triangle as the test reads it (obvhs's `RtTriangle` fields).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Tri {
+    pub(super) v0: Vec3A,
+    /// `v0 − v1`.
+    pub(super) e1: Vec3A,
+    /// `v2 − v0`.
+    pub(super) e2: Vec3A,
+    /// `e1 × e2`.
+    pub(super) ng: Vec3A,
+}
+
+/// Eight triangles (BVH-order indices `8k .. 8k + 8` of block `k`), each coordinate a row of 8
+/// lanes: rows 0–2 `v0`, 3–5 `e1`, 6–8 `e2`, 9–11 `ng` (x, y, z). Lanes past the last triangle
+/// are zeros and never tested.
+#[derive(Clone, Copy, Debug, Default)]
+#[repr(C, align(32))]
+pub(super) struct TriBlock {
+    rows: [[f32; 8]; 12],
+}
+
+impl TriBlock {
+    /// Lane `i`'s triangle.
+    #[inline(always)]
+    pub(super) fn get(&self, i: usize) -> Tri {
+        let r = &self.rows;
+        let v = |k: usize| Vec3A::new(r[k][i], r[k + 1][i], r[k + 2][i]);
+        Tri {
+            v0: v(0),
+            e1: v(3),
+            e2: v(6),
+            ng: v(9),
+        }
+    }
+
+    /// Put `t` in lane `i`.
+    pub(super) fn set(&mut self, i: usize, t: &RtTriangle) {
+        for (k, v) in [t.v0, t.e1, t.e2, t.ng].into_iter().enumerate() {
+            self.rows[3 * k][i] = v.x;
+            self.rows[3 * k + 1][i] = v.y;
+            self.rows[3 * k + 2][i] = v.z;
+        }
+    }
+}
+
+/// The closest kept hit of a group (triangles `base + k` for the bits `k` of `bits`), one
+/// triangle at a time in the order obvhs's traversal takes them (the highest bit first): a hit
+/// below `ray.tmax` that `keep` accepts shortens the ray and becomes `best`.
+#[inline(always)]
+pub(super) fn group_closest(
+    acc: &Accel,
+    base: u32,
+    mut bits: u32,
+    ray: &mut Ray,
+    best: &mut Option<(u32, Vec2, f32)>,
+    keep: &impl Fn(u32, Vec2) -> bool,
+) {
+    while bits != 0 {
+        let k = 31 - bits.leading_zeros();
+        bits &= !(1 << k);
+        let id = base + k;
+        if let Some((t, n, det)) = hit_triangle(&acc.tri(id), ray) {
+            if t < ray.tmax && keep(id, n / det) {
+                ray.tmax = t;
+                *best = Some((id, n, det));
+            }
+        }
+    }
+}
+
+/// Whether a triangle of a group (as [`group_closest`]) blocks `ray` and `keep` accepts it.
+#[inline(always)]
+pub(super) fn group_any(
+    acc: &Accel,
+    base: u32,
+    mut bits: u32,
+    ray: &Ray,
+    keep: &impl Fn(u32, Vec2) -> bool,
+) -> bool {
+    while bits != 0 {
+        let k = 31 - bits.leading_zeros();
+        bits &= !(1 << k);
+        let id = base + k;
+        if let Some((_, n, det)) = hit_triangle(&acc.tri(id), ray) {
+            if keep(id, n / det) {
+                return true;
+            }
+        }
+    }
+    false
+}
+
+/// The lanes of `b` that `ray` hits at `t ∈ [tmin, tmax]`, as a bit mask, with each lane's `t`,
+/// barycentric numerators and denominator: [`hit_triangle`] on 8 triangles at once, operation
+/// for operation (glam's cross product and dot products in their order, a multiply then an add,
+/// never fused; the same division), so each lane's values and verdict are its bits.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+fn block_hits_avx2(b: &TriBlock, ray: &Ray) -> (u32, [[f32; 8]; 4]) {
+    use std::arch::x86_64::*;
+    // SAFETY: a row is 8 f32s at a 32-byte boundary (TriBlock is align(32))
+    #[allow(unsafe_code)]
+    let row = |i: usize| unsafe { _mm256_load_ps(b.rows[i].as_ptr()) };
+    let (o, d) = (ray.origin, ray.direction);
+    let (mul, add, sub) = (_mm256_mul_ps, _mm256_add_ps, _mm256_sub_ps);
+    let (dx, dy, dz) = (
+        _mm256_set1_ps(d.x),
+        _mm256_set1_ps(d.y),
+        _mm256_set1_ps(d.z),
+    );
+    // c = v0 − origin; r = d × c as glam computes it
+    let cx = sub(row(0), _mm256_set1_ps(o.x));
+    let cy = sub(row(1), _mm256_set1_ps(o.y));
+    let cz = sub(row(2), _mm256_set1_ps(o.z));
+    let rx = sub(mul(dy, cz), mul(cy, dz));
+    let ry = sub(mul(dz, cx), mul(cz, dx));
+    let rz = sub(mul(dx, cy), mul(cx, dy));
+    // glam's dot: (x·x' + y·y') + z·z'
+    let dot = |ax, ay, az, bx, by, bz| add(add(mul(ax, bx), mul(ay, by)), mul(az, bz));
+    let (ngx, ngy, ngz) = (row(9), row(10), row(11));
+    let det = dot(ngx, ngy, ngz, dx, dy, dz);
+    let inv = _mm256_div_ps(_mm256_set1_ps(1.0), det);
+    let nu = dot(rx, ry, rz, row(6), row(7), row(8));
+    let nv = dot(rx, ry, rz, row(3), row(4), row(5));
+    let (u, v) = (mul(nu, inv), mul(nv, inv));
+    let w = sub(sub(_mm256_set1_ps(1.0), u), v);
+    let negative = _mm256_movemask_ps(_mm256_or_ps(_mm256_or_ps(u, v), w)) as u32;
+    let t = mul(dot(ngx, ngy, ngz, cx, cy, cz), inv);
+    let mask = |m: __m256| _mm256_movemask_ps(m) as u32;
+    let hits = mask(_mm256_cmp_ps::<_CMP_NEQ_UQ>(inv, _mm256_setzero_ps()))
+        & !negative
+        & mask(_mm256_cmp_ps::<_CMP_GE_OQ>(t, _mm256_set1_ps(ray.tmin)))
+        & mask(_mm256_cmp_ps::<_CMP_LE_OQ>(t, _mm256_set1_ps(ray.tmax)));
+    let mut out = [[0.0f32; 8]; 4];
+    if hits != 0 {
+        for (o, v) in out.iter_mut().zip([t, nu, nv, det]) {
+            // SAFETY: `o` is 8 f32s, what an unaligned store writes
+            #[allow(unsafe_code)]
+            unsafe {
+                _mm256_storeu_ps(o.as_mut_ptr(), v)
+            };
+        }
+    }
+    (hits, out)
+}
+
+/// The blocks a group touches, from the highest: `(block, lanes)` for each block of the
+/// triangles `base + k` (bits `k` of `bits`, at most 24 consecutive triangles, so at most 4
+/// blocks), its lanes as a bit mask.
+#[inline(always)]
+fn group_blocks(base: u32, bits: u32) -> impl Iterator<Item = (usize, u32)> {
+    let first = (base / 8) as usize;
+    let wide = (bits as u64) << (base % 8);
+    (0..4usize)
+        .rev()
+        .map(move |k| (first + k, ((wide >> (8 * k)) & 0xff) as u32))
+        .filter(|&(_, lanes)| lanes != 0)
+}
+
+/// [`group_closest`] with a block's 8 triangles tested at once ([`block_hits_avx2`]); the hits
+/// are then taken in the scalar order (the highest index first, strictly closer replaces), so
+/// the result is the scalar one's bits, `keep` included.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+pub(super) fn group_closest_avx2(
+    acc: &Accel,
+    base: u32,
+    bits: u32,
+    ray: &mut Ray,
+    best: &mut Option<(u32, Vec2, f32)>,
+    keep: &impl Fn(u32, Vec2) -> bool,
+) {
+    for (block, lanes) in group_blocks(base, bits) {
+        let (hits, [t, nu, nv, det]) = block_hits_avx2(&acc.blocks[block], ray);
+        let mut hits = hits & lanes;
+        while hits != 0 {
+            let i = (31 - hits.leading_zeros()) as usize;
+            hits &= !(1 << i);
+            let id = (block * 8 + i) as u32;
+            let n = Vec2::new(nu[i], nv[i]);
+            if t[i] < ray.tmax && keep(id, n / det[i]) {
+                ray.tmax = t[i];
+                *best = Some((id, n, det[i]));
+            }
+        }
+    }
+}
+
+/// [`group_any`] with a block's 8 triangles tested at once.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+pub(super) fn group_any_avx2(
+    acc: &Accel,
+    base: u32,
+    bits: u32,
+    ray: &Ray,
+    keep: &impl Fn(u32, Vec2) -> bool,
+) -> bool {
+    for (block, lanes) in group_blocks(base, bits) {
+        let (hits, [_, nu, nv, det]) = block_hits_avx2(&acc.blocks[block], ray);
+        let mut hits = hits & lanes;
+        while hits != 0 {
+            let i = hits.trailing_zeros() as usize;
+            hits &= hits - 1;
+            if keep((block * 8 + i) as u32, Vec2::new(nu[i], nv[i]) / det[i]) {
+                return true;
+            }
+        }
+    }
+    false
+}
