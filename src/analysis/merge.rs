@@ -170,6 +170,7 @@ fn differing_setting(m: &RenderMetadata, first: &RenderMetadata) -> Option<&'sta
         ("scene_hash", m.scene_hash != first.scene_hash),
         ("size", (m.width, m.height) != (first.width, first.height)),
         ("max_depth", m.max_depth != first.max_depth),
+        ("reuse", m.reuse != first.reuse),
         ("sampler", m.strategy.sampler != first.strategy.sampler),
         (
             "directions",

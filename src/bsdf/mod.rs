@@ -102,7 +102,6 @@ impl Bsdf {
         }
     }
 
-    /// True when the BSDF reflects nothing (paths end on it).
     /// True when sampling with `directions` reads the lobe-choice number: Phong directions
     /// with both a diffuse and a specular part.
     #[inline]
@@ -112,9 +111,22 @@ impl Bsdf {
             && self.p_diffuse < 1.0
     }
 
+    /// True when the BSDF reflects nothing (paths end on it).
     #[inline]
     pub fn is_black(&self) -> bool {
         self.kd.max_element() <= 0.0 && self.ks.max_element() <= 0.0
+    }
+
+    /// True when sampling with `directions` gives every direction of the hemisphere a positive
+    /// pdf whatever `wo` is: uniform and cosine directions, or Phong (and guided) directions
+    /// with a diffuse lobe. Path reuse needs it of a bounce it re-evaluates for another `wo`.
+    #[inline]
+    pub fn samples_hemisphere(&self, directions: Directions) -> bool {
+        !self.is_black()
+            && match directions {
+                Directions::Uniform | Directions::Cosine => true,
+                Directions::Phong | Directions::Guided => self.p_diffuse > 0.0,
+            }
     }
 
     /// `cosα` between `wi` and the mirror direction of `wo`.

@@ -66,6 +66,12 @@ pub struct RenderRequest {
     pub auto_candidates: Option<Strategies>,
     #[command(flatten)]
     pub error: ErrorArgs,
+    /// Path reuse across pixels (Bekaert et al. 2002): in blocks of K×K pixels each pixel's
+    /// first bounce is connected to every path of the block beyond its second vertex, the K²
+    /// ways weighted by the balance heuristic (unbiased; K² − 1 shadow rays more per sample;
+    /// neighbours' errors then correlate). 1: off [default: 1]
+    #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(1..=crate::render::MAX_REUSE as i64))]
+    pub reuse: Option<u32>,
     /// Exposure of the PNG, in stops (pixels × 2^EXPOSURE before tone mapping), within ±64.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = parse_exposure)]
     pub exposure: f32,
@@ -317,6 +323,7 @@ impl RenderRequest {
             },
             threads: self.threads,
             time_traces: self.time_traces,
+            reuse: self.reuse.unwrap_or(1),
             replicates: (self.error.replicates).unwrap_or(if acting {
                 ACTING_REPLICATES
             } else {

@@ -12,6 +12,17 @@ use crate::lights::LightStrategy;
 use crate::sampler::layout::BounceSample;
 use glam::Vec3;
 
+/// A light sample that reached its light: the direction in the vertex's shading frame, the
+/// BSDF toward it, the light's radiance, the MIS weight and the pdf (per solid angle).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct LightHit {
+    pub(super) wi_local: Vec3,
+    pub(super) f: Vec3,
+    pub(super) le: Vec3,
+    pub(super) w: f32,
+    pub(super) pdf: f32,
+}
+
 impl Path<'_> {
     /// What the light sample at `v` adds to the path's radiance (throughput `beta` so far), or
     /// `None` where it adds nothing (`share`: the probability a bounce samples `bsdf`, less than
@@ -22,13 +33,28 @@ impl Path<'_> {
     pub(super) fn next_event(
         &self,
         v: &Vertex,
-        (bsdf, share): (&Bsdf, f32),
+        bsdf: (&Bsdf, f32),
         g: Option<&GuideAt>,
         u: &BounceSample,
         beta: Vec3,
         rays: &mut RayCounts,
         stack: &mut TraceStack,
     ) -> Option<Vec3> {
+        let h = self.light_sample(v, bsdf, g, u, rays, stack)?;
+        Some(beta * h.f * h.le * (h.wi_local.z * h.w / h.pdf))
+    }
+
+    /// The light sample of [`Self::next_event`] in its parts, where it reached its light.
+    #[inline(always)]
+    pub(super) fn light_sample(
+        &self,
+        v: &Vertex,
+        (bsdf, share): (&Bsdf, f32),
+        g: Option<&GuideAt>,
+        u: &BounceSample,
+        rays: &mut RayCounts,
+        stack: &mut TraceStack,
+    ) -> Option<LightHit> {
         if !self.sample_lights {
             return None;
         }
@@ -68,7 +94,13 @@ impl Path<'_> {
                     _ => 1.0,
                 };
                 rays.mark(Phase::Bsdf);
-                return Some(beta * f * ls.le * (wi_local.z * w / ls.pdf));
+                return Some(LightHit {
+                    wi_local,
+                    f,
+                    le: ls.le,
+                    w,
+                    pdf: ls.pdf,
+                });
             }
         }
         None

@@ -46,9 +46,11 @@
 
 mod direct;
 mod recorder;
+pub mod reuse;
 
 pub use recorder::MAX_RECORDED_BOUNCES;
 use recorder::{Mixture, PathRecorder, Training};
+use reuse::Split;
 
 use crate::accel::TraceStack;
 use crate::bsdf::{Bsdf, BsdfSample, Directions, Specular};
@@ -126,12 +128,15 @@ impl Previous {
 
 /// Russian roulette after a bounce: the path goes on with probability `q = min(max β, 0.95)`
 /// (with a guided bounce the larger of that and the guide's [`GuideAt::survival`]), decided by
-/// `u`; a path that goes on has its throughput `beta` divided by `q`. Whether it goes on.
+/// `u`; a path that goes on has its throughput `beta` divided by `q`. Whether it goes on. The
+/// path's whole throughput is `β·scale` (`scale` 1 but for a reused continuation, traced
+/// from β = 1).
 #[inline(always)]
-fn survives(beta: &mut Vec3, u: f32, guided: Option<(&GuideAt, &Mixture)>) -> bool {
-    let q = beta.max_element().min(0.95);
+fn survives(beta: &mut Vec3, scale: Vec3, u: f32, guided: Option<(&GuideAt, &Mixture)>) -> bool {
+    let whole = *beta * scale;
+    let q = whole.max_element().min(0.95);
     let q = match guided {
-        Some((g, mix)) => q.max(g.survival(*beta, mix.p_guide)),
+        Some((g, mix)) => q.max(g.survival(whole, mix.p_guide)),
         None => q,
     };
     if u >= q {
@@ -207,9 +212,34 @@ pub fn radiance_guided<S: Sampler>(
 ) -> Vec3 {
     let path = Path::new(scene, settings, guide);
     match records {
-        Some(out) => path.trace(ray, sampler, rays, stack, Some(&mut Training::new(out))),
-        None => path.trace(ray, sampler, rays, stack, None),
+        Some(out) => path.trace(
+            ray,
+            sampler,
+            rays,
+            stack,
+            Some(&mut Training::new(out)),
+            None,
+        ),
+        None => path.trace(ray, sampler, rays, stack, None, None),
     }
+}
+
+/// [`radiance`] for path reuse ([`reuse`]): the path's first vertex, its reusable second vertex
+/// and what it found are left in `split` (a fresh [`Split`]) for [`reuse::combine`]. The same
+/// numbers are drawn as by [`radiance_guided`] without records.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub fn radiance_split<'a, S: Sampler>(
+    scene: &'a Scene,
+    ray: (Vec3, Vec3),
+    sampler: &mut S,
+    settings: &'a IntegratorSettings,
+    rays: &mut RayCounts,
+    stack: &mut TraceStack,
+    guide: Option<&'a Guide>,
+    split: &mut Split<'a>,
+) {
+    Path::new(scene, settings, guide).trace(ray, sampler, rays, stack, None, Some(split));
 }
 
 /// What every vertex of one path's estimate reads: the scene, the settings, the light sampler
@@ -249,10 +279,17 @@ impl<'a> Path<'a> {
         rays: &mut RayCounts,
         stack: &mut TraceStack,
         mut rec: Option<&mut dyn PathRecorder>,
+        mut split: Option<&mut Split<'a>>,
     ) -> Vec3 {
         let (scene, settings) = (self.scene, self.settings);
         let mut l = Vec3::ZERO;
         let mut beta = Vec3::ONE;
+        // what roulette multiplies `beta` by to see the path's whole throughput: 1, but for
+        // the continuation of a reusable second vertex, traced with `beta` from 1
+        let mut rr_scale = Vec3::ONE;
+        // whether this path's second vertex is reused ([`reuse`]): from there `l` and `beta`
+        // count from zero and one, the light sample and bounce are kept apart in `split`
+        let mut reusing = false;
         // None for the camera ray: what it sees counts fully in every mode
         let mut prev: Option<Previous> = None;
         for segment in 1..=settings.max_depth {
@@ -285,8 +322,9 @@ impl<'a> Path<'a> {
             if let Some(d) = delta {
                 let v = Vertex::new(scene, &s, front, wo);
                 let lobes = (d, scene.material_at(&s).delta_share, front);
+                let beta = (&mut beta, rr_scale);
                 let (nee, next) =
-                    self.delta_vertex(&v, &bsdf, lobes, segment, sampler, &mut beta, rays, stack);
+                    self.delta_vertex(&v, &bsdf, lobes, segment, sampler, beta, rays, stack);
                 l += nee;
                 let Some((o, wi, p)) = next else { break };
                 ((origin, dir), prev) = ((o, wi), Some(p));
@@ -308,7 +346,19 @@ impl<'a> Path<'a> {
             let v = Vertex::new(scene, &s, front, wo);
             let g = self.guide.map(|t| GuideAt::new(t, s.p));
             rays.mark(Phase::Shade);
-            if let Some(d) = self.next_event(&v, (&bsdf, 1.0), g.as_ref(), &u, beta, rays, stack) {
+            if let Some(sp) = split.as_deref_mut().filter(|_| segment <= 2) {
+                let arrival = (prev.map_or(0.0, |p| p.pdf), hit.t, dir);
+                reusing = sp.vertex(segment, &v, bsdf, g, settings.directions, arrival);
+                if reusing {
+                    (sp.own, l) = (l, Vec3::ZERO);
+                }
+            }
+            if reusing && segment == 2 {
+                let h = self.light_sample(&v, (&bsdf, 1.0), g.as_ref(), &u, rays, stack);
+                split.as_deref_mut().unwrap().light_at_tail(h);
+            } else if let Some(d) =
+                self.next_event(&v, (&bsdf, 1.0), g.as_ref(), &u, beta, rays, stack)
+            {
                 l += d;
             }
             let sampled = self.sample_direction(&v, &bsdf, g.as_ref(), &u);
@@ -319,13 +369,20 @@ impl<'a> Path<'a> {
             if wi.dot(v.ng) <= 0.0 {
                 break; // below the geometric surface: no light passes through
             }
-            beta *= bs.f * (bs.wi.z / bs.pdf);
+            if reusing && segment == 2 {
+                // the continuation counts from here: its throughput relative to this bounce's
+                rr_scale = beta * bs.f * (bs.wi.z / bs.pdf);
+                beta = Vec3::ONE;
+                split.as_deref_mut().unwrap().bounce_at_tail(bs.wi, bs.pdf);
+            } else {
+                beta *= bs.f * (bs.wi.z / bs.pdf);
+            }
             if let (Some(g), Some(mix), Some(rec)) = (&g, &mix, rec.as_deref_mut()) {
                 rec.bounce(g, v.p, mix, &bs, beta, l);
             }
             // segment = the vertices so far after the camera
             let guided = g.as_ref().zip(mix.as_ref());
-            if segment >= RR_START_BOUNCE && !survives(&mut beta, u.roulette, guided) {
+            if segment >= RR_START_BOUNCE && !survives(&mut beta, rr_scale, u.roulette, guided) {
                 break;
             }
             prev = Some(Previous::left(&v, bs.pdf));
@@ -333,6 +390,9 @@ impl<'a> Path<'a> {
         }
         if let Some(rec) = rec {
             rec.finish(l);
+        }
+        if let Some(sp) = split {
+            sp.finish(l, reusing);
         }
         l
     }
@@ -354,7 +414,7 @@ impl<'a> Path<'a> {
         (lobe, share, front): (Specular, f32, bool),
         segment: u32,
         sampler: &mut S,
-        beta: &mut Vec3,
+        (beta, rr_scale): (&mut Vec3, Vec3),
         rays: &mut RayCounts,
         stack: &mut TraceStack,
     ) -> (Vec3, Option<(Vec3, Vec3, Previous)>) {
@@ -410,7 +470,7 @@ impl<'a> Path<'a> {
             return (nee, None);
         }
         *beta *= bs.f * (bs.wi.z / pdf);
-        if roulette && !survives(beta, u.roulette, None) {
+        if roulette && !survives(beta, rr_scale, u.roulette, None) {
             return (nee, None);
         }
         (nee, Some((v.spawn, wi, Previous::left(v, pdf))))

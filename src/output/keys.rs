@@ -209,6 +209,20 @@ pub const KEYS: &[Key] = &[
         read: |m, v| set(&mut m.max_depth, v.num()?),
     },
     Key {
+        name: "reuse",
+        write: |m| m.reuse.map(|k| k.to_string()),
+        read: |m, v| {
+            m.reuse = v.opt()?;
+            match m.reuse {
+                Some(k) if !(2..=crate::render::MAX_REUSE).contains(&k) => Err(format!(
+                    "metadata 'reuse' is {k}, not 2 to {}",
+                    crate::render::MAX_REUSE
+                )),
+                _ => Ok(()),
+            }
+        },
+    },
+    Key {
         name: "render_seconds",
         write: |m| micros(m.render_seconds),
         read: |m, v| set(&mut m.render_seconds, v.seconds()?.unwrap_or(0.0)),

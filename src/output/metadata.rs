@@ -38,6 +38,8 @@ pub struct RenderMetadata {
     pub merged_seeds: Vec<u64>,
     pub strategy: Strategy,
     pub max_depth: u32,
+    /// Path reuse's block side (`--reuse K`), where it was on (K ≥ 2).
+    pub reuse: Option<u32>,
     /// Wall time of the render (summed over the inputs of a merge).
     pub render_seconds: f64,
     /// Samples dropped because their radiance was not finite.
@@ -173,6 +175,7 @@ impl RenderMetadata {
             merged_seeds: Vec::new(),
             strategy: settings.strategy,
             max_depth: settings.max_depth,
+            reuse: (settings.reuse > 1).then_some(settings.reuse),
             render_seconds: stats.elapsed.as_secs_f64(),
             nonfinite_samples: stats.nonfinite,
             pass_spp: None,
@@ -266,6 +269,7 @@ impl RenderMetadata {
                 ..Strategy::default()
             },
             max_depth: 0,
+            reuse: None,
             render_seconds: 0.0,
             nonfinite_samples: 0,
             pass_spp: None,

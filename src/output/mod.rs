@@ -88,6 +88,7 @@ mod tests {
             merged_seeds: Vec::new(),
             strategy: Preset::Importance.strategy(),
             max_depth: 5,
+            reuse: Some(3),
             render_seconds: 1.5,
             nonfinite_samples: 2,
             pass_spp: Some(16),

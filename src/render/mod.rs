@@ -76,7 +76,12 @@ pub struct RenderSettings {
     /// error is then estimated per sample. `vrpt render` defaults to 1, and to
     /// [`ACTING_REPLICATES`] where it acts on the estimate (`--adaptive`, `--target-error`).
     pub replicates: u32,
+    /// Path reuse across pixels in blocks of `reuse × reuse` ([`crate::integrator::reuse`]):
+    /// 1 (off) to [`MAX_REUSE`].
+    pub reuse: u32,
 }
+
+pub use crate::integrator::reuse::MAX_REUSE;
 
 /// The replicates of a render that acts on its error estimate (adaptive rounds, a target
 /// error) when `--replicates` is not given. A render that only reports its error keeps one
@@ -97,6 +102,7 @@ impl Default for RenderSettings {
             threads: None,
             time_traces: false,
             replicates: 1,
+            reuse: 1,
         }
     }
 }
@@ -165,6 +171,12 @@ fn camera_for(scene: &Scene, settings: &RenderSettings) -> Result<Camera> {
         return Err(Error::Settings(
             "width, height, spp and max depth must be at least 1".into(),
         ));
+    }
+    if !(1..=MAX_REUSE).contains(&settings.reuse) {
+        return Err(Error::Settings(format!(
+            "--reuse must be 1 (off) to {MAX_REUSE}, not {}",
+            settings.reuse
+        )));
     }
     let end = settings.first_sample as u64 + settings.spp as u64;
     if end > SAMPLE_INDICES {

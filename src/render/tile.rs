@@ -3,6 +3,10 @@
 //! set), with the stop flag read between pixels and every 256 samples of one.
 
 use super::*;
+use crate::integrator::radiance_split;
+use crate::integrator::reuse::{combine, Split, MAX_BLOCK};
+use crate::math::hash_words;
+use glam::Vec3;
 
 /// One tile's work: its pixels' sums and counters, and the traversal stack its rays use.
 struct Tile {
@@ -78,6 +82,8 @@ pub(super) struct Kernel<'a, F: SamplerFactory> {
     guide: Guiding<'a>,
     progress: &'a dyn Progress,
     seed: u64,
+    /// The side of the blocks whose pixels reuse each other's paths (1: none).
+    reuse: u32,
 }
 
 impl<F: SamplerFactory> Clone for Kernel<'_, F> {
@@ -110,6 +116,7 @@ impl<'a, F: SamplerFactory> Kernel<'a, F> {
             guide,
             progress,
             seed: settings.seed,
+            reuse: settings.reuse,
         }
     }
 
@@ -131,25 +138,38 @@ impl<'a, F: SamplerFactory> Kernel<'a, F> {
             Samples::Own(_) => SamplePass { origin: 0, size: 1 },
         };
         let sampler = self.factory.make(self.seed, set);
-        let tiles: Vec<Tile> = batch
-            .tiles
-            .clone()
-            .into_par_iter()
-            .map_with(sampler, |sampler, t| self.tile(t, batch, sums, sampler))
-            .collect();
+        // training paths record their own bounces: they are not reused
+        let k = if self.guide.record { 1 } else { self.reuse };
+        let tiles: Vec<Tile> = if k > 1 {
+            // one sampler per pixel of a tile, each kept on its pixel (a stratified sampler's
+            // tables are per pixel)
+            let samplers = vec![sampler; (TILE * TILE) as usize];
+            batch
+                .tiles
+                .clone()
+                .into_par_iter()
+                .map_with(samplers, |s, t| self.tile_reused(t, k, batch, sums, s))
+                .collect()
+        } else {
+            batch
+                .tiles
+                .clone()
+                .into_par_iter()
+                .map_with(sampler, |sampler, t| self.tile(t, batch, sums, sampler))
+                .collect()
+        };
         let mut out = gather(tiles, film);
         out.stats.elapsed = start.elapsed();
         out
     }
 
-    /// Tile `t` of `batch`, its pixels in row order, each from its sums in `sums` (if any).
-    fn tile(&self, t: u32, batch: &Batch, sums: Option<&Film>, sampler: &mut F::Sampler) -> Tile {
-        let tile_start = Instant::now();
+    /// Tile `t` of the image: empty, its pixels' sums to come.
+    fn empty_tile(&self, t: u32) -> Tile {
         let (width, height) = (self.width, self.height);
         let tiles_x = width.div_ceil(TILE);
         let origin = UVec2::new((t % tiles_x) * TILE, (t / tiles_x) * TILE);
         let size = UVec2::new(TILE.min(width - origin.x), TILE.min(height - origin.y));
-        let mut tile = Tile {
+        Tile {
             origin,
             size,
             sums: Vec::with_capacity((size.x * size.y) as usize),
@@ -160,7 +180,15 @@ impl<'a, F: SamplerFactory> Kernel<'a, F> {
             cut: false,
             records: Vec::new(),
             stack: TraceStack::default(),
-        };
+        }
+    }
+
+    /// Tile `t` of `batch`, its pixels in row order, each from its sums in `sums` (if any).
+    fn tile(&self, t: u32, batch: &Batch, sums: Option<&Film>, sampler: &mut F::Sampler) -> Tile {
+        let tile_start = Instant::now();
+        let width = self.width;
+        let mut tile = self.empty_tile(t);
+        let (origin, size) = (tile.origin, tile.size);
         'pixels: for y in origin.y..origin.y + size.y {
             for x in origin.x..origin.x + size.x {
                 if batch.stop.is_some_and(|f| f.load(Ordering::Relaxed)) {
@@ -187,6 +215,149 @@ impl<'a, F: SamplerFactory> Kernel<'a, F> {
                 };
                 tile.sums.push(s);
             }
+        }
+        self.progress.advance(tile.samples);
+        tile.time = tile_start.elapsed();
+        tile
+    }
+
+    /// Tile `t` of `batch` with path reuse in blocks of `k × k` pixels
+    /// ([`crate::integrator::reuse`]): sample by sample, every pixel of the tile traces its
+    /// path (with its own sampler of `samplers`, one per pixel of a tile), then each pixel's
+    /// estimate combines the paths of its block. The blocks' grid is shifted by a hash of the
+    /// seed and the sample (blocks end at the tile's edges), so a block's shared error falls
+    /// on other neighbours in every sample rather than printing the grid into the image; the
+    /// partition is fixed before the paths are drawn, so each sample stays unbiased. In an
+    /// adaptive round a pixel takes part in the tile's first `count` samples, its own. The
+    /// stop flag is read before every sample of the tile; a tile it cuts keeps its sums from
+    /// before. Every pixel's sums are returned, in row order.
+    fn tile_reused(
+        &self,
+        t: u32,
+        k: u32,
+        batch: &Batch,
+        sums: Option<&Film>,
+        samplers: &mut [F::Sampler],
+    ) -> Tile {
+        let tile_start = Instant::now();
+        let width = self.width;
+        let mut tile = self.empty_tile(t);
+        let (origin, size) = (tile.origin, tile.size);
+        let n = (size.x * size.y) as usize;
+        // per pixel of the tile: its first sample index and count, and what it adds
+        let mut first = vec![0u64; n];
+        let mut count = vec![0u64; n];
+        let mut added = vec![(DVec3::ZERO, DVec3::ZERO, 0u64); n];
+        for q in 0..n {
+            let (x, y) = (origin.x + q as u32 % size.x, origin.y + q as u32 / size.x);
+            let i = (y * width + x) as usize;
+            tile.sums
+                .push(sums.map_or((DVec3::ZERO, DVec3::ZERO, 0), |f| f.pixel_sums(i)));
+            (first[q], count[q]) = match &batch.samples {
+                Samples::Pass { range, .. } => (range.start, range.end - range.start),
+                Samples::Own(a) => {
+                    let set = SamplePass {
+                        origin: a.origin[i] as u32,
+                        size: a.count[i],
+                    };
+                    samplers[q] = self.factory.make(self.seed, set);
+                    (a.origin[i], a.count[i] as u64)
+                }
+            };
+        }
+        let mut splits = vec![Split::new(); n];
+        let mut block = [Split::new(); MAX_BLOCK];
+        let mut at = [0usize; MAX_BLOCK];
+        let mut out = [Vec3::ZERO; MAX_BLOCK];
+        let (mut nonfinite, mut samples) = (0u64, 0u64);
+        let steps = count.iter().copied().max().unwrap_or(0);
+        for step in 0..steps {
+            if batch.stop.is_some_and(|f| f.load(Ordering::Relaxed)) {
+                tile.cut = true;
+                break;
+            }
+            for q in 0..n {
+                splits[q] = Split::new();
+                if step >= count[q] {
+                    continue; // its own samples are done: no part in this one
+                }
+                let pixel = UVec2::new(origin.x + q as u32 % size.x, origin.y + q as u32 / size.x);
+                tile.rays.start_path(self.integrator.time_traces);
+                let sampler = &mut samplers[q];
+                // below SAMPLE_INDICES (checked by camera_for): a u32
+                sampler.start_pixel_sample(pixel, (first[q] + step) as u32);
+                let ray = self
+                    .camera
+                    .generate_ray(pixel, CameraSample::draw(sampler).pixel);
+                tile.rays.mark(crate::integrator::Phase::Camera);
+                radiance_split(
+                    self.scene,
+                    ray,
+                    sampler,
+                    &self.integrator,
+                    &mut tile.rays,
+                    &mut tile.stack,
+                    self.guide.tree,
+                    &mut splits[q],
+                );
+                tile.rays.end_path();
+            }
+            // the grid's shift in this sample: by the seed, the tile and the first pixel's
+            // sample index (the same for every pixel but in adaptive rounds)
+            let h = hash_words(&[self.seed ^ 0x5245_5553_4520_4b21, t as u64, first[0] + step]);
+            let (sx, sy) = ((h % k as u64) as u32, ((h >> 32) % k as u64) as u32);
+            let edges = |size: u32, shift: u32| {
+                let mut e = 0;
+                std::iter::from_fn(move || {
+                    (e < size).then(|| {
+                        let end = if e == 0 && shift > 0 { shift } else { e + k }.min(size);
+                        let r = e..end;
+                        e = end;
+                        r
+                    })
+                })
+            };
+            for ys in edges(size.y, sy) {
+                for xs in edges(size.x, sx) {
+                    let mut m = 0;
+                    for y in ys.clone() {
+                        for x in xs.clone() {
+                            let q = (y * size.x + x) as usize;
+                            (block[m], at[m]) = (splits[q], q);
+                            m += 1;
+                        }
+                    }
+                    combine(
+                        self.scene,
+                        self.integrator.directions,
+                        &block[..m],
+                        &mut tile.rays,
+                        &mut tile.stack,
+                        &mut out[..m],
+                    );
+                    for (&q, l) in at[..m].iter().zip(&out[..m]) {
+                        if step >= count[q] {
+                            continue;
+                        }
+                        samples += 1;
+                        if l.is_finite() {
+                            let v = l.as_dvec3();
+                            added[q].0 += v;
+                            added[q].1 += v * v;
+                            added[q].2 += 1;
+                        } else {
+                            nonfinite += 1;
+                        }
+                    }
+                }
+            }
+        }
+        if !tile.cut {
+            for (s, a) in tile.sums.iter_mut().zip(&added) {
+                (s.0, s.1, s.2) = (s.0 + a.0, s.1 + a.1, s.2 + a.2);
+            }
+            tile.samples = samples;
+            tile.nonfinite = nonfinite;
         }
         self.progress.advance(tile.samples);
         tile.time = tile_start.elapsed();

@@ -19,6 +19,7 @@ mod light_sampling;
 mod real_scenes;
 mod render_core;
 mod report_browser;
+mod reuse;
 mod scale_out;
 mod scene_loading;
 mod sobol;

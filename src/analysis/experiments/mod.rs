@@ -60,6 +60,9 @@ pub struct Entry<'a> {
     /// Its rounds' bar ([`PassPlan::min_allocation_gain`]; `None`: the render's default), set
     /// by [`Entry::with_min_allocation_gain`].
     pub min_allocation_gain: Option<f64>,
+    /// Path reuse of every run ([`RenderSettings::reuse`]; 1, off, unless set with
+    /// [`Entry::with_reuse`]).
+    pub reuse: u32,
     render: Box<EntryRender<'a>>,
 }
 
@@ -72,6 +75,7 @@ impl Entry<'static> {
             replicates: 1,
             adaptive: false,
             min_allocation_gain: None,
+            reuse: 1,
             render: Box::new(|scene, settings, plan| {
                 render_passes(scene, settings, plan, &NoProgress)
             }),
@@ -90,6 +94,7 @@ impl Entry<'static> {
             replicates: 1,
             adaptive: false,
             min_allocation_gain: None,
+            reuse: 1,
             render: Box::new(move |scene, settings, plan| {
                 let choice = crate::render::auto::choose(scene, settings, plan, &candidates)?;
                 let settings = RenderSettings {
@@ -118,6 +123,7 @@ impl<'a> Entry<'a> {
             replicates: 1,
             adaptive: false,
             min_allocation_gain: None,
+            reuse: 1,
             render: Box::new(move |scene, settings, plan| {
                 render_passes_with(scene, settings, plan, &factory, &NoProgress)
             }),
@@ -137,6 +143,15 @@ impl Entry<'_> {
     pub fn adaptive(mut self) -> Self {
         self.name += " adaptive";
         self.adaptive = true;
+        self
+    }
+
+    /// Path reuse in `k × k` blocks for every run, named "`<name> reuse k`" (1: off).
+    pub fn with_reuse(mut self, k: u32) -> Self {
+        if k > 1 {
+            self.name += &format!(" reuse {k}");
+        }
+        self.reuse = k;
         self
     }
 
@@ -298,6 +313,7 @@ fn run_settings(st: &Entry, s: &ExperimentSettings, spp: u32, seed: u64) -> Rend
         threads: None,
         time_traces: false,
         replicates: st.replicates,
+        reuse: st.reuse,
     }
 }
 
