@@ -134,5 +134,33 @@ fn guided(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, scenes, defaults, guided);
+/// Path reuse (`--reuse K`, issue 50) on the shipped Cornell box at 64×64, 16 spp (mis): the
+/// whole render without reuse and with blocks of 2, 3 and 4, so the cost of the connections
+/// (K² − 1 shadow rays and K² three-BSDF connections per pixel sample) shows per sample.
+fn reuse(c: &mut Criterion) {
+    let scene =
+        vrpt::scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-box"))
+            .expect("shipped scene");
+    let (w, h, spp) = (64, 64, 16);
+    let mut g = c.benchmark_group("render_reuse");
+    g.sample_size(10)
+        .warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(3))
+        .throughput(Throughput::Elements((w * h * spp) as u64));
+    for k in 1..=vrpt::render::MAX_REUSE {
+        let s = RenderSettings {
+            width: w,
+            height: h,
+            spp,
+            reuse: k,
+            ..Default::default()
+        };
+        g.bench_with_input(BenchmarkId::from_parameter(k), &s, |b, s| {
+            b.iter(|| black_box(render(&scene, s, &NoProgress).unwrap()))
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, scenes, defaults, guided, reuse);
 criterion_main!(benches);

@@ -26,7 +26,11 @@
 //!
 //! unbiased for every outgoing direction where `p′` is positive wherever the BSDF is: the
 //! tail's BSDF must sample its whole hemisphere (uniform or cosine directions, or a diffuse
-//! lobe beside the Phong one), else it is used by its own pixel only, as without reuse. The
+//! lobe beside the Phong one), and with a bounded weight for the new direction
+//! ([`Bsdf::reusable_bounce`]: a mostly glossy tail's lobe for another viewer falls where its
+//! bounce rarely goes), else it is used by its own pixel only, as without reuse. Which tails
+//! are shared depends on the surface alone, never on the path's random numbers, so each
+//! estimate stays unbiased. The
 //! regions are of surface *sides*: a technique whose head lies behind `z`'s side cannot sample
 //! it (its density is zero there). A pixel whose head is a delta surface (mirror, glass) or
 //! none (the camera ray escaped) is not a technique and keeps its own path; a tail on a delta
@@ -149,7 +153,7 @@ impl<'a> Split<'a> {
             });
             return false;
         }
-        if self.head.is_none() || !bsdf.samples_hemisphere(directions) {
+        if self.head.is_none() || !bsdf.reusable_bounce(directions) {
             return false;
         }
         let density = pdf * v.ng.dot(dir).abs() / (t * t);

@@ -104,7 +104,8 @@ fn smallest_p(
 }
 
 /// The shipped Cornell box (16×16, depth 8) and door (16×12, depth 10) with reuse in blocks of
-/// 2, 3 and 4, under MIS and under NEE with cosine directions and independent points, agree
+/// 2, 3 and 4, under MIS (Phong and guided directions) and under NEE with cosine directions and
+/// independent points, agree
 /// with a 16384-spp render without reuse, region by region. (A tail whose continuation kept
 /// its pixel's throughput, a bug this test caught, read t = −46 at twice these spp.)
 #[test]
@@ -123,6 +124,7 @@ fn reuse_agrees_with_the_path_tracer_on_the_cornell_box_and_the_door() {
                 (2, Strategy::of(Stratified, Directions::Phong, Mis)),
                 (3, Strategy::of(Independent, Directions::Cosine, Nee)),
                 (4, Strategy::of(Stratified, Directions::Phong, Mis)),
+                (2, Strategy::of(Stratified, Directions::Guided, Mis)),
             ],
         ),
         (

@@ -39,9 +39,15 @@ fn merged_shards_equal_the_render_of_all_samples() {
     // one pass of 26 (shards split inside the stratified set) and passes of 8 (shards straddle
     // passes, and the last pass is a set of 2)
     for pass in [None, Some("8")] {
-        for sampler in ["stratified", "independent", "sobol"] {
+        // (path reuse's blocks are shifted by the sample index, so a shard's are the whole's)
+        for (sampler, reuse) in [
+            ("stratified", "1"),
+            ("independent", "1"),
+            ("sobol", "1"),
+            ("stratified", "2"),
+        ] {
             let mut args: Vec<&str> = base.to_vec();
-            args.extend(["--sampler", sampler]);
+            args.extend(["--sampler", sampler, "--reuse", reuse]);
             if let Some(p) = pass {
                 args.extend(["--pass-spp", p]);
             }
@@ -78,12 +84,12 @@ fn merged_shards_equal_the_render_of_all_samples() {
                     let (x, y) = (m.pixels[k][c], w.pixels[k][c]);
                     assert!(
                         (x - y).abs() <= 4.0 * ulp * x.abs().max(y.abs()),
-                        "{sampler} pass {pass:?}: pixel {k} channel {c}: merged {x}, render {y}"
+                        "{sampler} reuse {reuse} pass {pass:?}: pixel {k} channel {c}: merged {x}, render {y}"
                     );
                     let tol = 16.0 * ulp * (y * y / 25.0 + wv[k][c]);
                     assert!(
                         (mv[k][c] - wv[k][c]).abs() <= tol,
-                        "{sampler} pass {pass:?}: variance {k}/{c}: {} vs {}",
+                        "{sampler} reuse {reuse} pass {pass:?}: variance {k}/{c}: {} vs {}",
                         mv[k][c],
                         wv[k][c]
                     );

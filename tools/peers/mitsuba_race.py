@@ -84,9 +84,12 @@ except ImportError:
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 NAME = "mitsuba-cornell"
 
-# vrpt contestants: (label, vrpt strategy). The first is vrpt's default.
+# vrpt contestants: (label, vrpt strategy, then any further flags of `vrpt render`). The first is
+# vrpt's default.
 VRPT_STRATEGIES = [
     ("vrpt mis (stratified+phong+mis)", "mis"),
+    ("vrpt mis --reuse 2", "mis --reuse 2"),
+    ("vrpt mis --reuse 3", "mis --reuse 3"),
     ("vrpt sobol+phong+mis", "sobol+phong+mis"),
     ("vrpt independent+phong+mis", "independent+phong+mis"),
     ("vrpt combined (bsdf only)", "combined"),
@@ -249,11 +252,12 @@ class Vrpt:
 
     def render(self, strategy, spp, seed, threads=None):
         """(image HxWx3 float64, render seconds recorded by vrpt, spp)."""
+        strategy, *extra = strategy.split()
         spp = self.spp_for(strategy, spp)
-        out = os.path.join(self.work, f"vrpt-{strategy.replace('+', '_')}.exr")
+        out = os.path.join(self.work, f"vrpt-{strategy.replace('+', '_')}{''.join(extra)}.exr")
         axes = strategy.split("+")
         flags = (["--strategy", strategy] if len(axes) == 1 else
-                 ["--sampler", axes[0], "--directions", axes[1], "--lights", axes[2]])
+                 ["--sampler", axes[0], "--directions", axes[1], "--lights", axes[2]]) + extra
         cmd = [self.exe, "render", self.scene_dir, *flags, "--spp", str(spp),
                "--seed", str(seed), "-o", out, "--quiet"]
         if threads:
