@@ -108,7 +108,7 @@ impl Tail {
 }
 
 /// One pixel's path of a block, split for reuse: filled by the path tracer
-/// ([`super::Path::trace`]), read by [`combine`].
+/// ([`super::radiance_split`]), read by [`combine`].
 #[derive(Clone, Copy, Default)]
 pub struct Split<'a> {
     /// Its first vertex, if it is a technique of the block.

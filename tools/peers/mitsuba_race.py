@@ -90,6 +90,7 @@ VRPT_STRATEGIES = [
     ("vrpt mis (stratified+phong+mis)", "mis"),
     ("vrpt mis --reuse 2", "mis --reuse 2"),
     ("vrpt mis --reuse 3", "mis --reuse 3"),
+    ("vrpt mis --reuse 4", "mis --reuse 4"),
     ("vrpt sobol+phong+mis", "sobol+phong+mis"),
     ("vrpt independent+phong+mis", "independent+phong+mis"),
     ("vrpt combined (bsdf only)", "combined"),
