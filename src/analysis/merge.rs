@@ -123,7 +123,9 @@ fn check_inputs(inputs: &[MergeInput]) -> Result<()> {
         if let Some(key) = differing_setting(m, first) {
             let show = |x: &std::collections::BTreeMap<String, String>| match key {
                 "size" => format!("{}×{}", x["width"], x["height"]),
-                k => x[k].clone(),
+                // written only where it is on
+                "reuse" => x.get("reuse").map_or("1 (off)".into(), |k| k.clone()),
+                k => x.get(k).cloned().unwrap_or_else(|| "absent".into()),
             };
             return Err(bad(
                 i,
