@@ -266,9 +266,6 @@ impl<'a, F: SamplerFactory> Kernel<'a, F> {
             };
         }
         let mut splits = vec![Split::new(); n];
-        let mut block = [Split::new(); MAX_BLOCK];
-        let mut at = [0usize; MAX_BLOCK];
-        let mut out = [Vec3::ZERO; MAX_BLOCK];
         let (mut nonfinite, mut samples) = (0u64, 0u64);
         let steps = count.iter().copied().max().unwrap_or(0);
         for step in 0..steps {
@@ -282,14 +279,8 @@ impl<'a, F: SamplerFactory> Kernel<'a, F> {
                     continue; // its own samples are done: no part in this one
                 }
                 let pixel = UVec2::new(origin.x + q as u32 % size.x, origin.y + q as u32 / size.x);
-                tile.rays.start_path(self.integrator.time_traces);
                 let sampler = &mut samplers[q];
-                // below SAMPLE_INDICES (checked by camera_for): a u32
-                sampler.start_pixel_sample(pixel, (first[q] + step) as u32);
-                let ray = self
-                    .camera
-                    .generate_ray(pixel, CameraSample::draw(sampler).pixel);
-                tile.rays.mark(crate::integrator::Phase::Camera);
+                let ray = self.camera_ray(pixel, first[q] + step, sampler, &mut tile.rays);
                 radiance_split(
                     self.scene,
                     ray,
@@ -302,55 +293,11 @@ impl<'a, F: SamplerFactory> Kernel<'a, F> {
                 );
                 tile.rays.end_path();
             }
-            // the grid's shift in this sample: by the seed, the tile and the first pixel's
-            // sample index (the same for every pixel but in adaptive rounds)
-            let h = hash_words(&[self.seed ^ 0x5245_5553_4520_4b21, t as u64, first[0] + step]);
-            let (sx, sy) = ((h % k as u64) as u32, ((h >> 32) % k as u64) as u32);
-            let edges = |size: u32, shift: u32| {
-                let mut e = 0;
-                std::iter::from_fn(move || {
-                    (e < size).then(|| {
-                        let end = if e == 0 && shift > 0 { shift } else { e + k }.min(size);
-                        let r = e..end;
-                        e = end;
-                        r
-                    })
-                })
-            };
-            for ys in edges(size.y, sy) {
-                for xs in edges(size.x, sx) {
-                    let mut m = 0;
-                    for y in ys.clone() {
-                        for x in xs.clone() {
-                            let q = (y * size.x + x) as usize;
-                            (block[m], at[m]) = (splits[q], q);
-                            m += 1;
-                        }
-                    }
-                    combine(
-                        self.scene,
-                        self.integrator.directions,
-                        &block[..m],
-                        &mut tile.rays,
-                        &mut tile.stack,
-                        &mut out[..m],
-                    );
-                    for (&q, l) in at[..m].iter().zip(&out[..m]) {
-                        if step >= count[q] {
-                            continue;
-                        }
-                        samples += 1;
-                        if l.is_finite() {
-                            let v = l.as_dvec3();
-                            added[q].0 += v;
-                            added[q].1 += v * v;
-                            added[q].2 += 1;
-                        } else {
-                            nonfinite += 1;
-                        }
-                    }
-                }
-            }
+            let index = first[0] + step;
+            let live = |q: usize| step < count[q];
+            let (n_new, bad) =
+                self.combine_blocks((t, k, index), &splits, live, &mut tile, &mut added);
+            (samples, nonfinite) = (samples + n_new, nonfinite + bad);
         }
         if !tile.cut {
             for (s, a) in tile.sums.iter_mut().zip(&added) {
@@ -362,6 +309,91 @@ impl<'a, F: SamplerFactory> Kernel<'a, F> {
         self.progress.advance(tile.samples);
         tile.time = tile_start.elapsed();
         tile
+    }
+
+    /// Start sample `index` of `pixel` on `sampler` and give its camera ray, counted in `rays`
+    /// (a path starts, and its camera phase ends).
+    #[inline(always)]
+    fn camera_ray(
+        &self,
+        pixel: UVec2,
+        index: u64,
+        sampler: &mut F::Sampler,
+        rays: &mut RayCounts,
+    ) -> (Vec3, Vec3) {
+        rays.start_path(self.integrator.time_traces);
+        // below SAMPLE_INDICES (checked by camera_for): a u32
+        sampler.start_pixel_sample(pixel, index as u32);
+        let ray = self
+            .camera
+            .generate_ray(pixel, CameraSample::draw(sampler).pixel);
+        rays.mark(crate::integrator::Phase::Camera);
+        ray
+    }
+
+    /// One sample of a reusing tile after its paths `splits` (one per pixel of `tile`, row
+    /// order): the tile cut into `k × k` blocks on a grid shifted by a hash of the seed, the
+    /// tile `t` and the sample `index`, each block's estimates combined and added to `added`
+    /// for the pixels `live` says take part. The samples added and the non-finite ones.
+    fn combine_blocks(
+        &self,
+        (t, k, index): (u32, u32, u64),
+        splits: &[Split],
+        live: impl Fn(usize) -> bool,
+        tile: &mut Tile,
+        added: &mut [Sums],
+    ) -> (u64, u64) {
+        let size = tile.size;
+        let mut block = [Split::new(); MAX_BLOCK];
+        let mut at = [0usize; MAX_BLOCK];
+        let mut out = [Vec3::ZERO; MAX_BLOCK];
+        let (mut samples, mut nonfinite) = (0, 0);
+        // the grid's shift in this sample (the same for every pixel but in adaptive rounds)
+        let h = hash_words(&[self.seed ^ 0x5245_5553_4520_4b21, t as u64, index]);
+        let (sx, sy) = ((h % k as u64) as u32, ((h >> 32) % k as u64) as u32);
+        let edges = |size: u32, shift: u32| {
+            let mut e = 0;
+            std::iter::from_fn(move || {
+                (e < size).then(|| {
+                    let end = if e == 0 && shift > 0 { shift } else { e + k }.min(size);
+                    let r = e..end;
+                    e = end;
+                    r
+                })
+            })
+        };
+        for ys in edges(size.y, sy) {
+            for xs in edges(size.x, sx) {
+                let mut m = 0;
+                for y in ys.clone() {
+                    for x in xs.clone() {
+                        let q = (y * size.x + x) as usize;
+                        (block[m], at[m]) = (splits[q], q);
+                        m += 1;
+                    }
+                }
+                combine(
+                    self.scene,
+                    self.integrator.directions,
+                    &block[..m],
+                    &mut tile.rays,
+                    &mut tile.stack,
+                    &mut out[..m],
+                );
+                for (&q, l) in at[..m].iter().zip(&out[..m]).filter(|(&q, _)| live(q)) {
+                    samples += 1;
+                    if l.is_finite() {
+                        let v = l.as_dvec3();
+                        added[q].0 += v;
+                        added[q].1 += v * v;
+                        added[q].2 += 1;
+                    } else {
+                        nonfinite += 1;
+                    }
+                }
+            }
+        }
+        (samples, nonfinite)
     }
 
     /// The samples `range` of `pixel`, in index order, added to its sums `from`; `None` when
@@ -383,13 +415,7 @@ impl<'a, F: SamplerFactory> Kernel<'a, F> {
             if index % 256 == 255 && stop.is_some_and(|f| f.load(Ordering::Relaxed)) {
                 return None;
             }
-            // below SAMPLE_INDICES (checked by camera_for): a u32
-            tile.rays.start_path(self.integrator.time_traces);
-            sampler.start_pixel_sample(pixel, index as u32);
-            let ray = self
-                .camera
-                .generate_ray(pixel, CameraSample::draw(sampler).pixel);
-            tile.rays.mark(crate::integrator::Phase::Camera);
+            let ray = self.camera_ray(pixel, index, sampler, &mut tile.rays);
             let l = radiance_guided(
                 self.scene,
                 ray,
