@@ -10,13 +10,13 @@ use crate::film::Film;
 use crate::image_io::{check_image_path, check_outputs, check_writable, Format, NamedPath};
 use crate::limits::{parse_exposure, parse_gain, parse_seconds, parse_shard, parse_threads};
 use crate::output::{write_render, EstimateRecord, RenderMetadata};
-use crate::render::auto::{self, Choice};
+use crate::render::auto::{self, Candidate, Candidates, Choice};
 use crate::render::{
     render_passes, render_passes_with, shard_range, PassPlan, Progress, RenderSettings,
     RenderStats, Rendered, SamplerFactory, ACTING_REPLICATES,
 };
 use crate::scene::Scene;
-use crate::strategy::{Strategies, Strategy, StrategyArgs};
+use crate::strategy::StrategyArgs;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
@@ -59,11 +59,11 @@ pub struct RenderRequest {
     pub threads: Option<usize>,
     #[command(flatten)]
     pub strategy: StrategyArgs,
-    /// With --strategy auto: the strategies its pilot chooses from, comma-separated, the first
-    /// kept unless another is more efficient beyond the pilot's noise [default: mis,
-    /// stratified+guided+mis]
-    #[arg(long, value_name = "STRATEGIES", value_parser = Strategies::parse)]
-    pub auto_candidates: Option<Strategies>,
+    /// With --strategy auto: the candidates its pilot chooses from, comma-separated strategies,
+    /// each with +reuseK for path reuse in K×K blocks (`mis+reuse3`); the first is kept unless
+    /// another is more efficient beyond the pilot's noise [default: mis,mis+reuse4]
+    #[arg(long, value_name = "CANDIDATES", value_parser = Candidates::parse)]
+    pub auto_candidates: Option<Candidates>,
     #[command(flatten)]
     pub error: ErrorArgs,
     /// Path reuse across pixels (Bekaert et al. 2002): in blocks of K×K pixels each pixel's
@@ -137,8 +137,8 @@ pub struct PreparedRender {
     spp_map: Option<PathBuf>,
     time_limit: Option<f64>,
     shard: Option<(u32, u32)>,
-    /// `--strategy auto`'s candidates (`settings.strategy` is then the first, until chosen).
-    auto: Option<Vec<Strategy>>,
+    /// `--strategy auto`'s candidates (the settings are then the first's, until chosen).
+    auto: Option<Vec<Candidate>>,
 }
 
 /// What a render did, and the image it made.
@@ -284,7 +284,7 @@ impl RenderRequest {
 
     /// `--strategy auto`'s candidates (`None` for a render of one strategy); an error for
     /// contradictory strategy flags.
-    fn candidates(&self) -> Result<Option<Vec<Strategy>>> {
+    fn candidates(&self) -> Result<Option<Vec<Candidate>>> {
         if !self.strategy.is_auto().map_err(Error::Settings)? {
             if self.auto_candidates.is_some() {
                 return Err(Error::Settings(
@@ -297,6 +297,12 @@ impl RenderRequest {
         let c = (self.auto_candidates.clone()).map_or_else(auto::default_candidates, |c| c.0);
         if c.is_empty() {
             return Err(Error::Settings("--auto-candidates: no strategies".into()));
+        }
+        if let Some(k) = self.reuse {
+            return Err(Error::Settings(format!(
+                "--strategy auto chooses path reuse too: name it among the candidates \
+                 (--auto-candidates mis,mis+reuse{k}), not with --reuse {k}"
+            )));
         }
         if self.shard.is_some() || self.error.adaptive {
             return Err(Error::Settings(
@@ -314,16 +320,20 @@ impl RenderRequest {
     fn settings(&self, scene: &Scene) -> Result<RenderSettings> {
         let acting = self.error.adaptive || self.error.target_error.is_some();
         let cap = self.error.target_error.map(|_| TARGET_ERROR_SPP_CAP);
+        let auto = self.candidates()?;
         Ok(RenderSettings {
             first_sample: self.first_sample,
             seed: self.seed,
-            strategy: match self.candidates()? {
-                Some(c) => c[0],
+            strategy: match &auto {
+                Some(c) => c[0].strategy,
                 None => self.strategy.resolve().map_err(Error::Settings)?,
             },
             threads: self.threads,
             time_traces: self.time_traces,
-            reuse: self.reuse.unwrap_or(1),
+            reuse: match &auto {
+                Some(c) => c[0].reuse,
+                None => self.reuse.unwrap_or(1),
+            },
             replicates: (self.error.replicates).unwrap_or(if acting {
                 ACTING_REPLICATES
             } else {
@@ -422,7 +432,7 @@ impl PreparedRender {
             return Ok(None);
         };
         let choice = auto::choose(&self.scene, &self.settings, &self.plan, candidates)?;
-        self.settings.strategy = choice.strategy;
+        self.settings = choice.settings(&self.settings);
         if let Some(t) = &mut self.plan.time_limit {
             *t = t.saturating_sub(choice.elapsed);
         }

@@ -46,8 +46,10 @@ pub struct RayCounts {
     pub camera: u64,
     /// Rays continuing a path after a bounce.
     pub bounce: u64,
-    /// Occlusion rays toward light samples.
+    /// Occlusion rays toward light samples, and those of path reuse's connections.
     pub shadow: u64,
+    /// Path reuse's connections (their shadow rays, also counted in `shadow`).
+    pub connection: u64,
     /// Nanoseconds spent in the timed traversals, when [`super::IntegratorSettings::time_traces`]
     /// is on.
     pub trace_ns: u64,
@@ -76,6 +78,7 @@ impl RayCounts {
         self.camera += o.camera;
         self.bounce += o.bounce;
         self.shadow += o.shadow;
+        self.connection += o.connection;
         self.trace_ns += o.trace_ns;
         self.timed += o.timed;
         for k in 0..PHASES {

@@ -232,6 +232,7 @@ fn visible(
     let len = d.length();
     let tmax = len - 2.0 * scene.ray_epsilon;
     rays.shadow += 1;
+    rays.connection += 1;
     tmax > 0.0 && !scene.occluded(stack, h.spawn, d / len, tmax)
 }
 

@@ -1,30 +1,42 @@
 //! `--strategy auto`: a render that chooses its own estimator from a pilot.
 //!
-//! Each candidate strategy renders a pilot of the same samples per pixel as
+//! A candidate ([`Candidate`]) is a strategy with path reuse in blocks of `K × K` pixels or
+//! without (`mis`, `mis+reuse4`). Each candidate renders a pilot of the same samples per pixel as
 //! [`PILOT_REPLICATES`] independent replicates, with seeds of its own ([`pilot_seed`]) that no
 //! other render uses. A pilot gives the image's relMSE, estimated from its replicates' spread
 //! (honest for every sampler, [`crate::estimate`]), with a standard error from the spread of the
 //! pixels' terms, and its cost. Its efficiency is `e = 1/(relMSE × cost)`: both factors scale
-//! with the samples (relMSE as 1/spp, cost as spp), so pilots of any size compare.
+//! with the samples (relMSE as 1/spp, cost as spp), so pilots of any size compare. Path reuse
+//! correlates neighbouring pixels' errors; each pixel's variance is still estimated honestly by
+//! its replicates, but the standard error, which counts the pixels' terms as independent, is
+//! then somewhat low (the squares of errors correlated by ρ ≈ 0.3 between neighbours correlate
+//! by about ρ² ≈ 0.1).
 //!
 //! The cost is the wall time under a time limit (such a render is not deterministic anyway),
-//! and otherwise the rays traced, training rays included: the same for every thread count, so
-//! the choice, and the image, are too. Rays weigh a guided vertex's extra work (the guide's
-//! lookup and sampling) as nothing, so a guided candidate looks slightly cheaper by rays than by
-//! time.
+//! and otherwise a count of work: the rays traced, training rays included, with each shadow ray
+//! of a reuse connection weighed [`CONNECTION_COST`] (it is a shadow ray and two BSDF
+//! evaluations, no surface to shade; see the constant for the measurement). A count is the same
+//! for every thread count, so the choice, and the image, are too. Rays weigh a guided vertex's
+//! extra work (the guide's lookup and sampling) as nothing, so a guided candidate looks slightly
+//! cheaper by rays than by time.
 //!
 //! The rule, fixed before any pilot renders: the most efficient candidate is chosen if its
 //! efficiency exceeds the first candidate's (the default) with `z = ln(e/e₀)/√(s² + s₀²) >`
 //! [`SWITCH_Z`], `s = se(relMSE)/relMSE`; otherwise the first. The pilots' samples are
-//! discarded, and the image is the chosen strategy's render with the render's own seed: the
-//! same image as `--strategy CHOSEN`, so each choice is unbiased and so is their mixture.
+//! discarded, and the image is the chosen candidate's render with the render's own seed: the
+//! same image as `--strategy CHOSEN [--reuse K]`, so each choice is unbiased and so is their
+//! mixture.
 //!
 //! A pilot sees the budget of a pilot: a guide trained on 1/16 of the samples has learned less
-//! than one trained on all of them, so the pilot understates guiding at large budgets.
+//! than one trained on all of them, so the pilot understates guiding at large budgets (it chose
+//! guided directions in none of 44 renders of the shipped scenes, where guided renders won up
+//! to 3.6×): guided directions are not among the default candidates. Path reuse learns nothing,
+//! so a pilot sees what the render will get.
 
 use super::{render_passes, NoProgress, PassPlan, RenderSettings};
 use crate::error::Result;
 use crate::estimate::rel_mse_standard_error;
+use crate::integrator::reuse::MAX_REUSE;
 use crate::scene::Scene;
 use crate::strategy::Strategy;
 use std::time::{Duration, Instant};
@@ -40,15 +52,99 @@ pub const PILOT_SHARE: f64 = 1.0 / 16.0;
 /// standard errors are conservative ([`rel_mse_standard_error`]).
 pub const SWITCH_Z: f64 = 2.0;
 
+/// What one shadow ray of a reuse connection costs, in rays of the rest of the render (each
+/// of which carries its share of shading, light sampling and film). Measured on one thread,
+/// 128×96 at 32 spp, the extra time of `--reuse K` over its extra shadow rays against the time
+/// per ray without reuse, K = 2, 3, 4: Cornell box 0.93, 0.80, 0.67; door 0.69, 0.61, 0.58;
+/// textured 1.12, 0.75, 0.62; night-hall 0.37, 0.26, 0.25 (its rays are long and its shading
+/// dear): the blocks' bookkeeping is shared by more connections at larger K. At K = 4 the
+/// weight 0.6 puts a render's cost within −5% to +2% of its time on the first three and +51%
+/// on night-hall, where it overstates what reuse costs (a switch it makes is then safe).
+pub const CONNECTION_COST: f64 = 0.6;
+
+/// One of `--strategy auto`'s candidates: a strategy, and the side of its path-reuse blocks
+/// (1: none; [`crate::integrator::reuse`]). Named as the strategy with `+reuseK` after it when
+/// `K > 1`: `mis`, `mis+reuse4`, `stratified+guided+mis+reuse2`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Candidate {
+    /// The sampler, directions and lights.
+    pub strategy: Strategy,
+    /// Path reuse in blocks of `reuse × reuse` pixels ([`RenderSettings::reuse`]; 1: off).
+    pub reuse: u32,
+}
+
+impl From<Strategy> for Candidate {
+    fn from(strategy: Strategy) -> Candidate {
+        Candidate { strategy, reuse: 1 }
+    }
+}
+
+impl std::fmt::Display for Candidate {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.reuse {
+            1 => write!(f, "{}", self.strategy),
+            k => write!(f, "{}+reuse{k}", self.strategy),
+        }
+    }
+}
+
+impl Candidate {
+    /// Parse a strategy ([`Strategy::parse`]), optionally with `+reuseK` after it.
+    pub fn parse(s: &str) -> std::result::Result<Candidate, String> {
+        let s = s.trim();
+        let Some((strategy, k)) = s.rsplit_once("+reuse") else {
+            return Strategy::parse(s).map(Candidate::from);
+        };
+        let reuse = (k.parse::<u32>().ok())
+            .filter(|k| (1..=MAX_REUSE).contains(k))
+            .ok_or_else(|| {
+                format!("'{s}': +reuseK takes K from 1 (off) to {MAX_REUSE}, not '{k}'")
+            })?;
+        Ok(Candidate {
+            strategy: Strategy::parse(strategy)?,
+            reuse,
+        })
+    }
+
+    /// The settings that render this candidate: `settings` with its strategy and reuse.
+    pub fn settings(&self, settings: &RenderSettings) -> RenderSettings {
+        RenderSettings {
+            strategy: self.strategy,
+            reuse: self.reuse,
+            ..settings.clone()
+        }
+    }
+}
+
+/// A comma-separated list of candidates (`--auto-candidates`, a clap value parser).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Candidates(pub Vec<Candidate>);
+
+impl Candidates {
+    /// The list `s` names ([`Candidate::parse`] each).
+    pub fn parse(s: &str) -> std::result::Result<Candidates, String> {
+        s.split(',')
+            .map(Candidate::parse)
+            .collect::<std::result::Result<_, _>>()
+            .map(Candidates)
+    }
+}
+
+/// The side of the reuse blocks of the default candidate with path reuse: at 10 s equal time
+/// K = 4 gained 2.5–3.9× on the Cornell box, night-hall and the door, K = 3 1.8–2.9×
+/// (`docs/reuse.md`).
+pub const AUTO_REUSE: u32 = 4;
+
 /// The candidates when none are named: today's default (stratified points, Phong directions,
-/// MIS) and the same with guided directions.
-pub fn default_candidates() -> Vec<Strategy> {
+/// MIS), and the same with path reuse in blocks of [`AUTO_REUSE`]². Not guided directions: a
+/// pilot cannot see what a guide trained on the whole budget gains (the module doc).
+pub fn default_candidates() -> Vec<Candidate> {
     let mis = Strategy::default();
     vec![
-        mis,
-        Strategy {
-            directions: crate::bsdf::Directions::Guided,
-            ..mis
+        Candidate::from(mis),
+        Candidate {
+            strategy: mis,
+            reuse: AUTO_REUSE,
         },
     ]
 }
@@ -56,7 +152,8 @@ pub fn default_candidates() -> Vec<Strategy> {
 /// What a pilot's cost counts.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Cost {
-    /// Rays traced (camera, bounce, shadow; training included).
+    /// Rays traced (camera, bounce, shadow; training included), a reuse connection's shadow
+    /// ray weighed [`CONNECTION_COST`].
     Rays,
     /// Wall seconds.
     Seconds,
@@ -66,7 +163,7 @@ pub enum Cost {
 #[derive(Clone, Debug, PartialEq)]
 pub struct PilotRow {
     /// The candidate.
-    pub strategy: Strategy,
+    pub candidate: Candidate,
     /// Samples per pixel of the pilot (all replicates).
     pub spp: u32,
     /// The estimated relMSE ([`crate::estimate::ErrorEstimate`]).
@@ -85,7 +182,7 @@ pub struct PilotRow {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Choice {
     /// The candidate chosen.
-    pub strategy: Strategy,
+    pub candidate: Candidate,
     /// Its index among the candidates.
     pub index: usize,
     /// Every candidate's pilot, in the order given.
@@ -140,7 +237,7 @@ pub fn choose(
     scene: &Scene,
     settings: &RenderSettings,
     plan: &PassPlan,
-    candidates: &[Strategy],
+    candidates: &[Candidate],
 ) -> Result<Choice> {
     let start = Instant::now();
     let cost = match plan.time_limit {
@@ -149,12 +246,11 @@ pub fn choose(
     };
     let pilot = |k: usize, spp: u32| -> Result<PilotRow> {
         let s = RenderSettings {
-            strategy: candidates[k],
             seed: pilot_seed(settings.seed, k),
             first_sample: 0,
             spp,
             replicates: PILOT_REPLICATES,
-            ..settings.clone()
+            ..candidates[k].settings(settings)
         };
         let p = PassPlan {
             stop: plan.stop.clone(),
@@ -167,11 +263,14 @@ pub fn choose(
         let rays = &r.stats.rays;
         let seconds = r.stats.elapsed.as_secs_f64();
         let spent = match cost {
-            Cost::Rays => (rays.camera + rays.bounce + rays.shadow) as f64,
+            Cost::Rays => {
+                let connections = rays.connection as f64;
+                (rays.total() as f64 - connections) + CONNECTION_COST * connections
+            }
             Cost::Seconds => seconds,
         };
         Ok(PilotRow {
-            strategy: candidates[k],
+            candidate: candidates[k],
             spp: r.spp,
             rel_mse: e.rel_mse,
             rel_mse_se: se,
@@ -200,7 +299,7 @@ pub fn choose(
     }
     let (index, z) = decide(&rows);
     Ok(Choice {
-        strategy: candidates[index],
+        candidate: candidates[index],
         index,
         rows,
         cost,
@@ -210,6 +309,12 @@ pub fn choose(
 }
 
 impl Choice {
+    /// The settings of the render after the pilots: `settings` with the chosen candidate's
+    /// strategy and reuse.
+    pub fn settings(&self, settings: &RenderSettings) -> RenderSettings {
+        self.candidate.settings(settings)
+    }
+
     /// The pilots as a table, and the choice, for the terminal.
     pub fn table(&self) -> String {
         let unit = match self.cost {
@@ -221,7 +326,7 @@ impl Choice {
             Cost::Seconds => 1.0,
         };
         let w = (self.rows.iter())
-            .map(|r| r.strategy.to_string().len())
+            .map(|r| r.candidate.to_string().len())
             .max()
             .unwrap_or(8)
             .max(8);
@@ -241,7 +346,7 @@ impl Choice {
             let mark = if k == self.index { " <- chosen" } else { "" };
             s += &format!(
                 "  {:w$}  {:>10.3e}  {:>9.1e}  {:>9.3}  {:>10.2}{mark}\n",
-                r.strategy.to_string(),
+                r.candidate.to_string(),
                 r.rel_mse,
                 r.rel_mse_se,
                 r.cost * scale,
@@ -249,9 +354,15 @@ impl Choice {
             );
         }
         s + &format!(
-            "  efficiency relative to {}; the best against it: z = {:.1} (switch above {SWITCH_Z})\n",
-            self.rows.first().map_or(String::new(), |r| r.strategy.to_string()),
-            self.z
+            "  efficiency relative to {}; the best against it: z = {:.1} (switch above {SWITCH_Z}){}\n",
+            self.rows.first().map_or(String::new(), |r| r.candidate.to_string()),
+            self.z,
+            match self.cost {
+                Cost::Rays if self.rows.iter().any(|r| r.candidate.reuse > 1) => {
+                    format!("; a reuse connection's ray counts {CONNECTION_COST}")
+                }
+                _ => String::new(),
+            }
         )
     }
 
@@ -260,11 +371,11 @@ impl Choice {
     pub fn record(&self) -> String {
         let e0 = self.rows.first().map_or(f64::NAN, |r| r.efficiency);
         let rows: Vec<String> = (self.rows.iter())
-            .map(|r| format!("{} {:.3}", r.strategy, r.efficiency / e0))
+            .map(|r| format!("{} {:.3}", r.candidate, r.efficiency / e0))
             .collect();
         format!(
             "chose {}; efficiency {}; z {:.2}; pilots {} spp, cost {}",
-            self.strategy,
+            self.candidate,
             rows.join(", "),
             self.z,
             self.rows.first().map_or(0, |r| r.spp),
@@ -280,9 +391,9 @@ impl Choice {
 mod tests {
     use super::*;
 
-    fn row(strategy: Strategy, rel_mse: f64, se: f64, cost: f64) -> PilotRow {
+    fn row(candidate: Candidate, rel_mse: f64, se: f64, cost: f64) -> PilotRow {
         PilotRow {
-            strategy,
+            candidate,
             spp: 4,
             rel_mse,
             rel_mse_se: se,
@@ -317,6 +428,42 @@ mod tests {
             decide(&[row(a, 0.02, 1e-4, 1.0), row(b, 0.01, 1e-4, 3.0)]).0,
             0
         );
+    }
+
+    #[test]
+    fn candidates_are_named_as_parsed() {
+        let c = Candidates::parse("mis, mis+reuse4,stratified+guided+mis+reuse2,importance+reuse1")
+            .unwrap()
+            .0;
+        let names: Vec<String> = c.iter().map(Candidate::to_string).collect();
+        assert_eq!(
+            names,
+            [
+                "mis",
+                "mis+reuse4",
+                "stratified+guided+mis+reuse2",
+                "importance"
+            ]
+        );
+        assert_eq!(c[1].strategy, Strategy::default());
+        assert_eq!((c[1].reuse, c[3].reuse), (4, 1));
+        for n in &names {
+            assert_eq!(Candidate::parse(n).unwrap().to_string(), *n);
+        }
+        for bad in [
+            "mis+reuse0",
+            "mis+reuse5",
+            "mis+reuse",
+            "mis+reusex",
+            "nosuch+reuse2",
+        ] {
+            assert!(Candidate::parse(bad).is_err(), "{bad}");
+        }
+        assert!(Candidate::parse("mis+reuse9")
+            .unwrap_err()
+            .contains("+reuseK"));
+        let d = default_candidates();
+        assert_eq!((d[0].reuse, d[1].reuse), (1, AUTO_REUSE));
     }
 
     #[test]

@@ -175,10 +175,18 @@ impl RenderStats {
                 scene.textures.bytes() as f64 / 1024.0
             ),
         };
+        let reuse = match settings.reuse {
+            1 => String::new(),
+            k => format!(", reuse {k}×{k}"),
+        };
+        let connections = match self.rays.connection {
+            0 => String::new(),
+            n => format!(", {n} of them reuse connections"),
+        };
         format!(
             "{}: {} triangles, BVH built in {:.1} ms ({:.1} KiB){textures}\n\
-             rendered {}x{} at {} spp ({}, max depth {}) in {:.3} s: {:.3} M samples/s, {:.2} Mrays/s\n\
-             rays: {} ({} camera, {} bounce, {} shadow; {:.2} per sample)\n",
+             rendered {}x{} at {} spp ({}{reuse}, max depth {}) in {:.3} s: {:.3} M samples/s, {:.2} Mrays/s\n\
+             rays: {} ({} camera, {} bounce, {} shadow{connections}; {:.2} per sample)\n",
             scene.source.display(),
             scene.triangle_count(),
             scene.accel.build_time.as_secs_f64() * 1e3,

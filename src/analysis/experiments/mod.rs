@@ -25,6 +25,7 @@ use crate::analysis::metrics::{
 use crate::error::{Error, Result};
 use crate::image_io::RgbImage;
 use crate::output::RenderMetadata;
+use crate::render::auto::Candidate;
 use crate::render::{
     render_passes, render_passes_with, with_threads, NoProgress, PassPlan, Progress,
     RenderSettings, Rendered, SamplerFactory,
@@ -87,20 +88,18 @@ impl Entry<'static> {
     /// `--strategy auto` among `candidates` (the first is the default; see
     /// [`crate::render::auto`]), named "auto": every run renders the pilots with its own seed,
     /// then the strategy they chose, and its time includes the pilots'.
-    pub fn auto(candidates: Vec<Strategy>) -> Entry<'static> {
+    pub fn auto(candidates: Vec<Candidate>) -> Entry<'static> {
+        let first = candidates.first().copied();
         Entry {
             name: "auto".into(),
-            strategy: candidates.first().copied().unwrap_or_default(),
+            strategy: first.map_or_else(Strategy::default, |c| c.strategy),
             replicates: 1,
             adaptive: false,
             min_allocation_gain: None,
-            reuse: 1,
+            reuse: first.map_or(1, |c| c.reuse),
             render: Box::new(move |scene, settings, plan| {
                 let choice = crate::render::auto::choose(scene, settings, plan, &candidates)?;
-                let settings = RenderSettings {
-                    strategy: choice.strategy,
-                    ..settings.clone()
-                };
+                let settings = choice.settings(settings);
                 let plan = PassPlan {
                     time_limit: (plan.time_limit).map(|t| t.saturating_sub(choice.elapsed)),
                     ..plan.clone()
