@@ -443,6 +443,28 @@ AUTO_SCENES = ["cornell-box", "glossy-plates", "lit-checker", "checker-plane", "
                "gap", "sun-sky", "textured", "glass"]
 
 
+@section("reuse")
+def reuse():
+    """docs/reuse.md's table: path reuse (`--reuse K`, K = 2, 3, 4) against the default at equal
+    time, 10 s, every scene of the efficiency table at its size there, relMSE from seed pairs."""
+    print("`vrpt render scenes/SCENE --width W --height H --spp 1048576 --time-limit 10 --seed S` "
+          "with and without `--reuse K`, seed pairs (1, 2) and (3, 4), configs interleaved; gain = "
+          "relMSE(default) / relMSE(--reuse K):\n")
+    ks = (2, 3, 4)
+    configs = [("default", [])] + [(f"reuse {k}", ["--reuse", k]) for k in ks]
+    rows, gains = [], {k: [] for k in ks}
+    for scene, w, h in EFFICIENCY_SCENES:
+        r = equal_time_pairs(scene, w, h, 10, configs)
+        base = r["default"][0]
+        for k in ks:
+            gains[k].append(base / r[f"reuse {k}"][0])
+        rows.append([scene, g(base)] + [f"{base / r[f'reuse {k}'][0]:.2f}" for k in ks])
+        print(f"  {scene}: {rows[-1]}", file=sys.stderr, flush=True)
+    print(table(["scene", "default relMSE"] + [f"`--reuse {k}`" for k in ks], rows))
+    geo = {k: math.exp(statistics.mean(math.log(x) for x in v)) for k, v in gains.items()}
+    print("\nGeometric mean of the gain: " + ", ".join(f"K = {k} {geo[k]:.2f}×" for k in ks) + ".")
+
+
 @section("auto")
 def auto():
     """`--strategy auto` against its candidates and guided directions at equal time as a user

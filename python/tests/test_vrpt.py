@@ -85,6 +85,11 @@ def test_auto_renders_the_strategy_its_pilots_chose():
     assert auto.metadata["auto"].startswith("chose mis;")
     assert "<- chosen" in auto.summary
     assert np.array_equal(auto.image, mis.image)
+    # path reuse as a candidate, first: kept (it is the more efficient on the box), rendered as reuse=4
+    auto = vrpt.render(CORNELL, strategy="auto", auto_candidates=["mis+reuse4", "mis"], spp=32, seed=4, **SMALL)
+    reused = vrpt.render(CORNELL, strategy="mis", reuse=4, spp=32, seed=4, **SMALL)
+    assert auto.metadata["auto"].startswith("chose mis+reuse4;")
+    assert np.array_equal(auto.image, reused.image)
 
 
 def test_errors_are_python_exceptions_with_the_cli_messages(tmp_path):

@@ -269,7 +269,8 @@ def render(
     Each argument is the ``vrpt render`` flag of its name (``vrpt render --help`` says what each
     does); ``None`` takes the scene's ``[render]`` default, then vrpt's. ``strategy`` is a preset
     (``independent``, ``stratified``, ``importance``, ``combined``, ``nee``, ``mis``; default:
-    vrpt's default) or ``auto`` (a pilot chooses among ``auto_candidates``; what it measured is in
+    vrpt's default) or ``auto`` (a pilot chooses among ``auto_candidates``, strategies with
+    ``+reuseK`` for path reuse such as ``"mis,mis+reuse4"``, the default; what it measured is in
     ``summary`` and ``metadata["auto"]``), and ``sampler``, ``directions`` (``guided`` for path
     guiding), ``lights``, ``light_points``, ``light_choice`` set one part of it.
     ``sampler`` may also be a function of your own (see ``SamplerFunction``): slow, since Python
