@@ -17,6 +17,7 @@
 //! - [`integrate`]: known-answer integrals by each sampler against the variance formulas;
 //! - [`warptest`]: every warp's samples against its integrated pdf, chi-square and ∫pdf.
 
+mod black;
 pub mod diff;
 pub mod experiment;
 pub mod guide;
