@@ -31,14 +31,15 @@
 //!   power alike), `power` (`Φ = π A lum(Le)` for an emitter, `πR² ∫lum(L_env) dω` for the
 //!   environment seen by a scene of bounding radius `R`, pbrt's estimate), or `tree`: the
 //!   environment by power against all emitters, then a light BVH ([`LightTree`]: Conty Estevez
-//!   & Kulla 2018, pbrt-v4's `BVHLightSampler`) descended from the root, each child chosen in
-//!   proportion to an importance bound from the receiving point (power, distance, the emitters'
-//!   normal cone and the receiver's cosine).
+//!   & Kulla 2018, pbrt-v4's `BVHLightSampler`, built binary and collapsed to four children a
+//!   node) descended from the root, each child chosen in proportion to an importance bound from
+//!   the receiving point (power, distance, the emitters' normal cone and the receiver's cosine),
+//!   the four children's bounds evaluated at once.
 //!
 //!   Every choice is exact for the values drawn: it splits the 2²⁴ units of `u`'s resolution in
 //!   whole units (a [`Discrete`] for uniform and power; the tree splits its node's range at each
-//!   level in proportion to the two importances, at least one unit to a child of positive
-//!   importance while the range has two), so the pmf returned for a light is exactly the
+//!   level in proportion to the children's importances, at least one unit to each child of
+//!   positive importance while the range has enough), so the pmf returned for a light is exactly the
 //!   frequency with which it is chosen, also from a given point. A light whose share rounds to
 //!   no unit (a tree node's range down to one unit, below ~2⁻²⁴ of the importance at that point)
 //!   has pmf 0 there: MIS then gives its BSDF-found light full weight (unbiased); with NEE alone

@@ -893,8 +893,9 @@ fn pairing_rectangles_is_linear_in_a_fan_of_emitters() {
 /// about one light per level down to depth 48, where splits go by count; the 70,000 lights
 /// clustered at the origin are then split by count, 17 levels more (65 in all before the fix).
 /// The tree must stay within
-/// the trail's 64 bits, and for receivers near the cluster every unit `k` chooses a light whose
-/// pmf, followed along its own path, gives exactly the units the choice reported.
+/// the trail's 64 bits (since the tree has four children a node, two bits a level of half as
+/// many levels), and for receivers near the cluster every unit `k` chooses a light whose pmf,
+/// followed along its own path, gives exactly the units the choice reported.
 #[test]
 fn a_deep_light_tree_keeps_every_lights_path() {
     use vrpt::lights::LightTree;
@@ -918,13 +919,15 @@ fn a_deep_light_tree_keeps_every_lights_path() {
         emitters.push(tri(1000 + j, c, 1e-3, 1.0));
     }
     let tree = LightTree::build(&emitters);
+    // the binary build is about 60 levels deep; collapsed, two of them make one level of
+    // four ways, two bits of the trail each
     assert!(
-        tree.depth() >= 50,
+        tree.depth() >= 28,
         "the test needs a deep tree: depth {}",
         tree.depth()
     );
     assert!(
-        tree.depth() <= 64,
+        tree.depth() <= 32,
         "depth {}: past the trail's 64 bits",
         tree.depth()
     );
