@@ -117,6 +117,13 @@ impl Bsdf {
             && self.p_diffuse < 1.0
     }
 
+    /// The probability that Phong sampling takes the diffuse lobe, `avg(kd)/(avg(kd)+avg(ks))`
+    /// (1 without a specular part).
+    #[inline]
+    pub fn diffuse_share(&self) -> f32 {
+        self.p_diffuse
+    }
+
     /// True when the BSDF reflects nothing (paths end on it).
     #[inline]
     pub fn is_black(&self) -> bool {

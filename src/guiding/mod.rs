@@ -39,7 +39,8 @@
 //! **Sampling** (the integrator): one-sample MIS between the BSDF's own strategy (the Phong
 //! lobes) and the guide, the guide chosen with probability `α`, learned per leaf from
 //! [`GUIDE_FRACTION`] on (a leaf that has learned nothing has `α = 0`: pure BSDF sampling, as
-//! in the first iteration); the direction's pdf is the mixture `α·p_guide + (1−α)·p_bsdf`, and
+//! in the first iteration) and scaled at each vertex by its BSDF's diffuse share
+//! ([`GuideAt::for_bsdf`]: a narrow lobe is sampled by its own strategy); the direction's pdf is the mixture `α·p_guide + (1−α)·p_bsdf`, and
 //! that mixture is the BSDF pdf NEE's and the light's MIS weights see. A guided direction below
 //! the surface is a failed sample, as for the Phong lobe. Russian roulette asks the guide too
 //! ([`GuideAt::survival`]): a path heading where the leaf learned light survives in proportion
@@ -180,6 +181,21 @@ impl<'a> GuideAt<'a> {
         }
     }
 
+    /// This guide at a vertex whose BSDF takes its diffuse lobe with probability `diffuse` (1
+    /// on a diffuse surface, [`crate::bsdf::Bsdf::diffuse_share`]): `α` scaled by it, as
+    /// Cycles scales its guiding probability by the BSDF's diffuse sampling fraction. The guide
+    /// learns the radiance arriving from each direction, a good proposal under a broad lobe
+    /// and a poor one under a narrow lobe, whose own sampling follows the product far better: on
+    /// the glossy plates (`kd` 0.05, `ks` 0.9) a guide sampled with the leaves' learned `α`
+    /// wasted that share of the plates' samples outside their lobes, and the guided render lost
+    /// 3.6× to Phong directions at 10 s. The learner of `α` is unchanged (its gradient weighs
+    /// each record by the pdf it was drawn with, whatever mixture drew it).
+    #[inline]
+    pub fn for_bsdf(mut self, diffuse: f32) -> Self {
+        self.alpha *= diffuse;
+        self
+    }
+
     /// The mixture pdf `α·p_guide(wi) + (1−α)·p_bsdf` of world direction `wi`.
     #[inline]
     pub fn mixture_pdf(&self, wi: Vec3, p_bsdf: f32) -> f32 {
@@ -299,5 +315,14 @@ mod tests {
         assert!(g.survival(small, bright) > g.survival(small, dim));
         assert!(g.survival(small * 10.0, bright) > g.survival(small, bright));
         assert_eq!(g.survival(Vec3::splat(1e6), bright), 0.99);
+        // on a diffuse surface the guide keeps its share; under the glossy plates' BSDF (kd
+        // 0.05, ks 0.9) it takes the diffuse lobe's share of it, and the mixture follows
+        let diffuse = crate::bsdf::Bsdf::new(Vec3::splat(0.5), Vec3::ZERO, 1.0);
+        let plate = crate::bsdf::Bsdf::new(Vec3::splat(0.05), Vec3::splat(0.9), 1000.0);
+        assert_eq!(g.for_bsdf(diffuse.diffuse_share()).alpha, GUIDE_FRACTION);
+        let on_plate = g.for_bsdf(plate.diffuse_share());
+        assert!((on_plate.alpha - GUIDE_FRACTION * 0.05 / 0.95).abs() < 1e-6);
+        let m = on_plate.mixture(bright, 2.0);
+        assert!((m - (on_plate.alpha * bright + (1.0 - on_plate.alpha) * 2.0)).abs() < 1e-6);
     }
 }

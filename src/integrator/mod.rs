@@ -344,7 +344,7 @@ impl<'a> Path<'a> {
             );
             rays.mark(Phase::Sampler);
             let v = Vertex::new(scene, &s, front, wo);
-            let g = self.guide.map(|t| GuideAt::new(t, s.p));
+            let g = (self.guide).map(|t| GuideAt::new(t, s.p).for_bsdf(bsdf.diffuse_share()));
             rays.mark(Phase::Shade);
             if let Some(sp) = split.as_deref_mut().filter(|_| segment <= 2) {
                 let arrival = (prev.map_or(0.0, |p| p.pdf), hit.t, dir);
