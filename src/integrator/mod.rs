@@ -99,6 +99,23 @@ pub fn mis_weight(p_a: f32, p_b: f32) -> f32 {
     1.0 / (1.0 + r * r)
 }
 
+/// What a path carries from vertex to vertex in [`Path::trace`].
+struct PathState {
+    /// The radiance gathered so far (from the reused second vertex on: the continuation's).
+    l: Vec3,
+    /// The throughput.
+    beta: Vec3,
+    /// What roulette multiplies `beta` by to see the path's whole throughput: 1, but for the
+    /// continuation of a reusable second vertex, traced with `beta` from 1.
+    rr_scale: Vec3,
+    /// Whether this path's second vertex is reused ([`reuse`]): from there `l` and `beta`
+    /// count from zero and one, the light sample and bounce are kept apart in the split.
+    reusing: bool,
+    /// The vertex the last ray left; `None` for the camera ray, whose hit counts fully in every
+    /// mode.
+    prev: Option<Previous>,
+}
+
 /// The vertex a BSDF-sampled ray left from: what the MIS weight of what it hits needs.
 #[derive(Clone, Copy, Debug)]
 struct Previous {
@@ -269,7 +286,8 @@ impl<'a> Path<'a> {
 
     /// The estimate of one path from `ray`: emission found by the path (weighted by
     /// [`Self::emission_weight`]), a light sample at every vertex ([`Self::next_event`]), a
-    /// bounce ([`Self::sample_direction`]) and Russian roulette; `rec`, where there is one (a
+    /// bounce ([`Self::sample_direction`]) and Russian roulette ([`Self::surface_vertex`] at a
+    /// Phong vertex, [`Self::delta_vertex`] at a mirror or glass); `rec`, where there is one (a
     /// training iteration), sees every guided bounce and the path's end.
     #[inline(always)]
     fn trace<S: Sampler>(
@@ -282,18 +300,15 @@ impl<'a> Path<'a> {
         mut split: Option<&mut Split<'a>>,
     ) -> Vec3 {
         let (scene, settings) = (self.scene, self.settings);
-        let mut l = Vec3::ZERO;
-        let mut beta = Vec3::ONE;
-        // what roulette multiplies `beta` by to see the path's whole throughput: 1, but for
-        // the continuation of a reusable second vertex, traced with `beta` from 1
-        let mut rr_scale = Vec3::ONE;
-        // whether this path's second vertex is reused ([`reuse`]): from there `l` and `beta`
-        // count from zero and one, the light sample and bounce are kept apart in `split`
-        let mut reusing = false;
-        // None for the camera ray: what it sees counts fully in every mode
-        let mut prev: Option<Previous> = None;
+        let mut st = PathState {
+            l: Vec3::ZERO,
+            beta: Vec3::ONE,
+            rr_scale: Vec3::ONE,
+            reusing: false,
+            prev: None,
+        };
         for segment in 1..=settings.max_depth {
-            *if prev.is_none() {
+            *if st.prev.is_none() {
                 &mut rays.camera
             } else {
                 &mut rays.bounce
@@ -303,15 +318,15 @@ impl<'a> Path<'a> {
             });
             rays.mark(Phase::Trace);
             let Some(hit) = hit else {
-                let w = self.emission_weight(prev, |v| self.lights.environment_pdf(v.n, dir));
-                l += beta * scene.environment().radiance(dir) * w;
+                let w = self.emission_weight(st.prev, |v| self.lights.environment_pdf(v.n, dir));
+                st.l += st.beta * scene.environment().radiance(dir) * w;
                 break;
             };
             let s = scene.surface(&hit);
             let wo = -dir;
             let front = s.ng.dot(wo) > 0.0;
-            if let Some((le, w)) = self.emitted(prev, hit.prim, &s, front) {
-                l += beta * le * w;
+            if let Some((le, w)) = self.emitted(st.prev, hit.prim, &s, front) {
+                st.l += st.beta * le * w;
             }
             if segment == settings.max_depth {
                 rays.mark(Phase::Shade);
@@ -319,82 +334,105 @@ impl<'a> Path<'a> {
             }
             let bsdf = scene.bsdf_at(&s);
             let delta = scene.material_at(&s).specular.filter(|d| !d.is_black());
-            if let Some(d) = delta {
+            let next = if let Some(d) = delta {
                 let v = Vertex::new(scene, &s, front, wo);
                 let lobes = (d, scene.material_at(&s).delta_share, front);
-                let beta = (&mut beta, rr_scale);
+                let beta = (&mut st.beta, st.rr_scale);
                 let (nee, next) =
                     self.delta_vertex(&v, &bsdf, lobes, segment, sampler, beta, rays, stack);
-                l += nee;
-                let Some((o, wi, p)) = next else { break };
-                ((origin, dir), prev) = ((o, wi), Some(p));
-                continue;
-            }
-            if bsdf.is_black() {
-                break;
-            }
-            rays.mark(Phase::Shade);
-            // values this bounce cannot use are skipped, not drawn (the same image, fewer hashes)
-            let u = BounceSample::draw_needed(
-                sampler,
-                self.sample_lights,
-                bsdf.chooses_lobe(settings.directions),
-                segment >= RR_START_BOUNCE,
-                settings.directions == Directions::Guided,
-            );
-            rays.mark(Phase::Sampler);
-            let v = Vertex::new(scene, &s, front, wo);
-            let g = (self.guide).map(|t| GuideAt::new(t, s.p).for_bsdf(bsdf.diffuse_share()));
-            rays.mark(Phase::Shade);
-            if let Some(sp) = split.as_deref_mut().filter(|_| segment <= 2) {
-                let arrival = (prev.map_or(0.0, |p| p.pdf), hit.t, dir);
-                reusing = sp.vertex(segment, &v, bsdf, g, settings.directions, arrival);
-                if reusing {
-                    (sp.own, l) = (l, Vec3::ZERO);
-                }
-            }
-            if reusing && segment == 2 {
-                let h = self.light_sample(&v, (&bsdf, 1.0), g.as_ref(), &u, rays, stack);
-                split.as_deref_mut().unwrap().light_at_tail(h);
-            } else if let Some(d) =
-                self.next_event(&v, (&bsdf, 1.0), g.as_ref(), &u, beta, rays, stack)
-            {
-                l += d;
-            }
-            let sampled = self.sample_direction(&v, &bsdf, g.as_ref(), &u);
-            rays.mark(Phase::Bsdf);
-            let Some((wi, bs, mix)) = sampled else {
-                break;
-            };
-            if wi.dot(v.ng) <= 0.0 {
-                break; // below the geometric surface: no light passes through
-            }
-            if reusing && segment == 2 {
-                // the continuation counts from here: its throughput relative to this bounce's
-                rr_scale = beta * bs.f * (bs.wi.z / bs.pdf);
-                beta = Vec3::ONE;
-                split.as_deref_mut().unwrap().bounce_at_tail(bs.wi, bs.pdf);
+                st.l += nee;
+                next.map(|(o, wi, p)| ((o, wi), p))
             } else {
-                beta *= bs.f * (bs.wi.z / bs.pdf);
-            }
-            if let (Some(g), Some(mix), Some(rec)) = (&g, &mix, rec.as_deref_mut()) {
-                rec.bounce(g, v.p, mix, &bs, beta, l);
-            }
-            // segment = the vertices so far after the camera
-            let guided = g.as_ref().zip(mix.as_ref());
-            if segment >= RR_START_BOUNCE && !survives(&mut beta, rr_scale, u.roulette, guided) {
-                break;
-            }
-            prev = Some(Previous::left(&v, bs.pdf));
-            (origin, dir) = (v.spawn, wi);
+                if bsdf.is_black() {
+                    break;
+                }
+                let at = (segment, &s, front, wo, hit.t);
+                let (rec, split) = (rec.as_deref_mut(), split.as_deref_mut());
+                self.surface_vertex(at, &bsdf, sampler, rays, stack, rec, split, &mut st)
+            };
+            let Some((ray, p)) = next else { break };
+            ((origin, dir), st.prev) = (ray, Some(p));
         }
         if let Some(rec) = rec {
-            rec.finish(l);
+            rec.finish(st.l);
         }
         if let Some(sp) = split {
-            sp.finish(l, reusing);
+            sp.finish(st.l, st.reusing);
         }
-        l
+        st.l
+    }
+
+    /// The vertex ending segment `segment` at surface point `s` (hit from `wo`, from its
+    /// `front` or not, `t` along the ray) with the Phong BSDF `bsdf`: a light sample, a bounce
+    /// and Russian roulette, the guide asked where there is one, the second vertex handed to
+    /// path reuse's `split` where it is reused. The next ray (origin, direction) and the vertex
+    /// it leaves, or `None` where the path ends.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn surface_vertex<'r, S: Sampler>(
+        &self,
+        (segment, s, front, wo, t): (u32, &SurfacePoint, bool, Vec3, f32),
+        bsdf: &Bsdf,
+        sampler: &mut S,
+        rays: &mut RayCounts,
+        stack: &mut TraceStack,
+        rec: Option<&mut (dyn PathRecorder + 'r)>,
+        mut split: Option<&mut Split<'a>>,
+        st: &mut PathState,
+    ) -> Option<((Vec3, Vec3), Previous)> {
+        let (scene, settings) = (self.scene, self.settings);
+        rays.mark(Phase::Shade);
+        // values this bounce cannot use are skipped, not drawn (the same image, fewer hashes)
+        let u = BounceSample::draw_needed(
+            sampler,
+            self.sample_lights,
+            bsdf.chooses_lobe(settings.directions),
+            segment >= RR_START_BOUNCE,
+            settings.directions == Directions::Guided,
+        );
+        rays.mark(Phase::Sampler);
+        let v = Vertex::new(scene, s, front, wo);
+        let g = (self.guide).map(|t| GuideAt::new(t, s.p).for_bsdf(bsdf.diffuse_share()));
+        rays.mark(Phase::Shade);
+        if let Some(sp) = split.as_deref_mut().filter(|_| segment <= 2) {
+            let arrival = (st.prev.map_or(0.0, |p| p.pdf), t, -wo);
+            st.reusing = sp.vertex(segment, &v, *bsdf, g, settings.directions, arrival);
+            if st.reusing {
+                (sp.own, st.l) = (st.l, Vec3::ZERO);
+            }
+        }
+        let tail = st.reusing && segment == 2;
+        if tail {
+            let h = self.light_sample(&v, (bsdf, 1.0), g.as_ref(), &u, rays, stack);
+            split.as_deref_mut().unwrap().light_at_tail(h);
+        } else if let Some(d) =
+            self.next_event(&v, (bsdf, 1.0), g.as_ref(), &u, st.beta, rays, stack)
+        {
+            st.l += d;
+        }
+        let sampled = self.sample_direction(&v, bsdf, g.as_ref(), &u);
+        rays.mark(Phase::Bsdf);
+        let (wi, bs, mix) = sampled?;
+        if wi.dot(v.ng) <= 0.0 {
+            return None; // below the geometric surface: no light passes through
+        }
+        if tail {
+            // the continuation counts from here: its throughput relative to this bounce's
+            st.rr_scale = st.beta * bs.f * (bs.wi.z / bs.pdf);
+            st.beta = Vec3::ONE;
+            split.unwrap().bounce_at_tail(bs.wi, bs.pdf);
+        } else {
+            st.beta *= bs.f * (bs.wi.z / bs.pdf);
+        }
+        if let (Some(g), Some(mix), Some(rec)) = (&g, &mix, rec) {
+            rec.bounce(g, v.p, mix, &bs, st.beta, st.l);
+        }
+        // segment = the vertices so far after the camera
+        let guided = g.as_ref().zip(mix.as_ref());
+        if segment >= RR_START_BOUNCE && !survives(&mut st.beta, st.rr_scale, u.roulette, guided) {
+            return None;
+        }
+        Some(((v.spawn, wi), Previous::left(&v, bs.pdf)))
     }
 
     /// A vertex with a delta lobe (a mirror or glass, [`Specular`]), alone or beside the Phong
