@@ -187,7 +187,7 @@ const WIDTH: usize = 4;
 /// binary, top down by the bucketed surface-area-orientation heuristic of Conty Estevez & Kulla,
 /// then collapsed (a node's children are its binary children, each interior one replaced by its
 /// own two), so a descent evaluates the importance of four children at once, lane by lane
-/// ([`WideNode::importance`]), in half the levels. Nodes are depth first.
+/// (`WideNode::importance`), in half the levels. Nodes are depth first.
 #[derive(Debug)]
 pub struct LightTree {
     nodes: Vec<WideNode>,
