@@ -125,6 +125,7 @@ fn check_inputs(inputs: &[MergeInput]) -> Result<()> {
                 "size" => format!("{}×{}", x["width"], x["height"]),
                 // written only where it is on
                 "reuse" => x.get("reuse").map_or("1 (off)".into(), |k| k.clone()),
+                "roulette" => x.get("roulette").map_or("classic".into(), |k| k.clone()),
                 k => x.get(k).cloned().unwrap_or_else(|| "absent".into()),
             };
             return Err(bad(
@@ -173,6 +174,7 @@ fn differing_setting(m: &RenderMetadata, first: &RenderMetadata) -> Option<&'sta
         ("size", (m.width, m.height) != (first.width, first.height)),
         ("max_depth", m.max_depth != first.max_depth),
         ("reuse", m.reuse != first.reuse),
+        ("roulette", m.roulette != first.roulette),
         ("sampler", m.strategy.sampler != first.strategy.sampler),
         (
             "directions",

@@ -73,6 +73,12 @@ pub struct RenderRequest {
     /// neighbours' errors then correlate). 1: off [default: 1]
     #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(1..=crate::render::MAX_REUSE as i64))]
     pub reuse: Option<u32>,
+    /// How paths end and split: `classic` Russian roulette from the third bounce, or `ears`,
+    /// efficiency-aware roulette and splitting (Rath et al. 2022) learned in a short training
+    /// (at most an eighth of the spp or time) and then frozen: unbiased, a path may split into
+    /// up to 20 continuations where that pays [default: classic]
+    #[arg(long, value_name = "KIND")]
+    pub roulette: Option<crate::integrator::rrs::Roulette>,
     /// Exposure of the PNG, in stops (pixels × 2^EXPOSURE before tone mapping), within ±64.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = parse_exposure)]
     pub exposure: f32,
@@ -335,6 +341,7 @@ impl RenderRequest {
                 Some(c) => c[0].reuse,
                 None => self.reuse.unwrap_or(1),
             },
+            roulette: self.roulette.unwrap_or_default(),
             replicates: (self.error.replicates).unwrap_or(if acting {
                 ACTING_REPLICATES
             } else {

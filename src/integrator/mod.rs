@@ -44,10 +44,13 @@
 //! (a `PathRecorder`, the guide's records; an image's paths have none), so guided and
 //! unguided paths are one loop.
 
+mod branching;
 mod direct;
 mod recorder;
 pub mod reuse;
+pub mod rrs;
 
+pub use branching::MAX_RRS_DEPTH;
 pub use recorder::MAX_RECORDED_BOUNCES;
 use recorder::{Mixture, PathRecorder, Training};
 use reuse::Split;
@@ -258,6 +261,25 @@ pub fn radiance_split<'a, S: Sampler>(
     split: &mut Split<'a>,
 ) {
     Path::new(scene, settings, guide).trace(ray, sampler, rays, stack, None, Some(split));
+}
+
+/// [`radiance_guided`] under `--roulette ears` ([`rrs`]): the path splits and ends by the
+/// factors `rrs` gives, and a training iteration's continuations are recorded there. No guide
+/// records: a guide learns from classic paths before.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub fn radiance_rrs<S: Sampler>(
+    scene: &Scene,
+    ray: (Vec3, Vec3),
+    sampler: &mut S,
+    settings: &IntegratorSettings,
+    rays: &mut RayCounts,
+    stack: &mut TraceStack,
+    guide: Option<&Guide>,
+    rrs: &mut rrs::RrsPath,
+) -> Vec3 {
+    let path = Path::new(scene, settings, guide);
+    path.trace_rrs(ray, None, 1, Vec3::ONE, sampler, rays, stack, rrs)
 }
 
 /// What every vertex of one path's estimate reads: the scene, the settings, the light sampler

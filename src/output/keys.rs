@@ -1,6 +1,7 @@
 //! The table of metadata keys ([`KEYS`]): each key's name, writer and reader, in one row.
 
 use super::metadata::{EstimateMethod, EstimateRecord, GuideRecord, RenderMetadata};
+use crate::integrator::rrs::Roulette;
 use crate::names::{parse_value, value_name};
 use std::str::FromStr;
 
@@ -220,6 +221,15 @@ pub const KEYS: &[Key] = &[
                 )),
                 _ => Ok(()),
             }
+        },
+    },
+    Key {
+        // written only where it is not the classic one
+        name: "roulette",
+        write: |m| (m.roulette != Roulette::Classic).then(|| m.roulette.to_string()),
+        read: |m, v| {
+            m.roulette = v.axis("roulette")?.unwrap_or_default();
+            Ok(())
         },
     },
     Key {

@@ -40,6 +40,8 @@ pub struct RenderMetadata {
     pub max_depth: u32,
     /// Path reuse's block side (`--reuse K`), where it was on (K ≥ 2).
     pub reuse: Option<u32>,
+    /// How paths ended and split (`--roulette`).
+    pub roulette: crate::integrator::rrs::Roulette,
     /// Wall time of the render (summed over the inputs of a merge).
     pub render_seconds: f64,
     /// Samples dropped because their radiance was not finite.
@@ -176,6 +178,7 @@ impl RenderMetadata {
             strategy: settings.strategy,
             max_depth: settings.max_depth,
             reuse: (settings.reuse > 1).then_some(settings.reuse),
+            roulette: settings.roulette,
             render_seconds: stats.elapsed.as_secs_f64(),
             nonfinite_samples: stats.nonfinite,
             pass_spp: None,
@@ -270,6 +273,7 @@ impl RenderMetadata {
             },
             max_depth: 0,
             reuse: None,
+            roulette: Default::default(),
             render_seconds: 0.0,
             nonfinite_samples: 0,
             pass_spp: None,

@@ -89,6 +89,7 @@ mod tests {
             strategy: Preset::Importance.strategy(),
             max_depth: 5,
             reuse: Some(3),
+            roulette: crate::integrator::rrs::Roulette::Ears,
             render_seconds: 1.5,
             nonfinite_samples: 2,
             pass_spp: Some(16),

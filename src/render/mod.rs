@@ -20,7 +20,8 @@ use crate::error::{Error, Result};
 use crate::estimate::{self, ErrorEstimate, Replicates};
 use crate::film::Film;
 use crate::guiding::{Guide, Record, TreeSize};
-use crate::integrator::{radiance_guided, IntegratorSettings, RayCounts};
+use crate::integrator::rrs::Roulette;
+use crate::integrator::{radiance_guided, IntegratorSettings, RayCounts, MAX_RRS_DEPTH};
 use crate::sampler::layout::CameraSample;
 use crate::sampler::{IndependentSampler, Sampler, SamplerKind, SobolSampler, StratifiedSampler};
 use crate::scene::Scene;
@@ -35,10 +36,11 @@ use std::time::{Duration, Instant};
 mod adaptive;
 pub mod auto;
 mod passes;
+mod rrs_training;
 mod stats;
 mod tile;
 mod training;
-pub use stats::{GuideStats, RenderStats};
+pub use stats::{GuideStats, RenderStats, RrsStats};
 use tile::{tile_count, Alloc, Batch, BatchOutput, Kernel, Samples};
 pub use training::learn_guide;
 use training::Trainer;
@@ -79,6 +81,8 @@ pub struct RenderSettings {
     /// Path reuse across pixels in blocks of `reuse × reuse` ([`crate::integrator::reuse`]):
     /// 1 (off) to [`MAX_REUSE`].
     pub reuse: u32,
+    /// How paths end and split: classic roulette, or learned (EARS, [`crate::integrator::rrs`]).
+    pub roulette: Roulette,
 }
 
 pub use crate::integrator::reuse::MAX_REUSE;
@@ -103,6 +107,7 @@ impl Default for RenderSettings {
             time_traces: false,
             replicates: 1,
             reuse: 1,
+            roulette: Roulette::Classic,
         }
     }
 }
@@ -177,6 +182,22 @@ fn camera_for(scene: &Scene, settings: &RenderSettings) -> Result<Camera> {
             "--reuse must be 1 (off) to {MAX_REUSE}, not {}",
             settings.reuse
         )));
+    }
+    if settings.roulette == Roulette::Ears {
+        if settings.reuse > 1 {
+            return Err(Error::Settings(
+                "--roulette ears does not combine with --reuse yet: a reused path's second vertex \
+                 would have to split with it"
+                    .into(),
+            ));
+        }
+        if settings.max_depth > MAX_RRS_DEPTH {
+            return Err(Error::Settings(format!(
+                "--roulette ears traces its continuations recursively: --max-depth at most \
+                 {MAX_RRS_DEPTH}, not {}",
+                settings.max_depth
+            )));
+        }
     }
     let end = settings.first_sample as u64 + settings.spp as u64;
     if end > SAMPLE_INDICES {
@@ -484,13 +505,23 @@ pub fn render_passes_with<F: SamplerFactory>(
             };
             trainer.train(start, &mut stats)
         });
-        let training = start.elapsed();
         let guide = Guiding {
             tree: tree.as_ref(),
             record: false,
         };
+        let trainer = Trainer {
+            scene,
+            camera: &camera,
+            settings,
+            plan,
+            factory,
+        };
+        let rrs = (settings.roulette == Roulette::Ears)
+            .then(|| trainer.train_rrs(tree.as_ref(), &mut stats));
+        let training = start.elapsed();
         let job = Job {
-            kernel: Kernel::new(scene, &camera, settings, factory, guide, progress),
+            kernel: Kernel::new(scene, &camera, settings, factory, guide, progress)
+                .with_rrs(rrs.as_ref().map(|r| r.kernel())),
             settings,
             plan,
             start,
@@ -504,6 +535,9 @@ pub fn render_passes_with<F: SamplerFactory>(
         if let (Some(t), Some(g)) = (&tree, &mut stats.guide) {
             g.final_time = stats.elapsed - training;
             g.tree = t.size();
+        }
+        if let Some(r) = &mut stats.rrs {
+            r.final_time = stats.elapsed - training;
         }
         r.stats = stats;
         Ok(r)

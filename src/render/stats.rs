@@ -21,6 +21,47 @@ pub struct RenderStats {
     /// What path guiding's training did (guided directions only); `elapsed`, `rays` and
     /// `thread_time` include the training, `samples` does not.
     pub guide: Option<GuideStats>,
+    /// What `--roulette ears`'s training did; `elapsed`, `rays` and `thread_time` include it,
+    /// `samples` does not.
+    pub rrs: Option<RrsStats>,
+}
+
+/// What the training of `--roulette ears` did.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct RrsStats {
+    /// Training iterations rendered (of 2, 2, 4, 8 … spp; the first with classic roulette).
+    pub iterations: u32,
+    /// Their samples per pixel in all.
+    pub training_spp: u64,
+    /// Wall time of the training.
+    pub training: Duration,
+    /// Wall time of the image after it.
+    pub final_time: Duration,
+    /// The cache's nodes.
+    pub nodes: usize,
+    /// The image's factor `√(C_img / V_img)` (rays per sample over relative variance).
+    pub image_factor: f32,
+    /// The mean number of continuations at the camera ray's vertex in the last iteration.
+    pub first_split: f64,
+}
+
+impl RrsStats {
+    /// One line: the training's size and time, the cache, the image factor.
+    pub fn summary(&self) -> String {
+        format!(
+            "ears: training {} spp in {} iterations, {:.3} s; image {:.3} s ({:.0}% of the time \
+             training); cache {} nodes; image factor {:.3}; {:.2} continuations at the first vertex\n",
+            self.training_spp,
+            self.iterations,
+            self.training.as_secs_f64(),
+            self.final_time.as_secs_f64(),
+            100.0 * self.training.as_secs_f64()
+                / (self.training + self.final_time).as_secs_f64().max(1e-9),
+            self.nodes,
+            self.image_factor,
+            self.first_split
+        )
+    }
 }
 
 /// What the training of a guided render did.
@@ -108,6 +149,9 @@ impl RenderStats {
         }
         if let Some(g) = &self.guide {
             s += &g.summary();
+        }
+        if let Some(r) = &self.rrs {
+            s += &r.summary();
         }
         s
     }

@@ -3,8 +3,9 @@
 //! set), with the stop flag read between pixels and every 256 samples of one.
 
 use super::*;
-use crate::integrator::radiance_split;
 use crate::integrator::reuse::{combine, Split, MAX_BLOCK};
+use crate::integrator::rrs::{RrsLearned, RrsPath, RrsRecord, MAX_EXTRA_BRANCHES};
+use crate::integrator::{radiance_rrs, radiance_split};
 use crate::math::hash_words;
 use glam::Vec3;
 
@@ -21,6 +22,8 @@ struct Tile {
     cut: bool,
     /// Its paths' guiding records, in sample order (training iterations only).
     records: Vec<Record>,
+    /// Its paths' continuations under `--roulette ears`, in sample order (its training only).
+    rrs_records: Vec<RrsRecord>,
     stack: TraceStack,
 }
 
@@ -64,6 +67,8 @@ pub(super) struct BatchOutput {
     pub(super) cut: bool,
     /// The paths' guiding records, tile by tile in sample order (when the guide records).
     pub(super) records: Vec<Record>,
+    /// The continuations of `--roulette ears`, tile by tile in sample order (when it records).
+    pub(super) rrs_records: Vec<RrsRecord>,
     /// What the samples added to the pixels' sums (a render without a film only).
     pub(super) total: DVec3,
 }
@@ -84,6 +89,18 @@ pub(super) struct Kernel<'a, F: SamplerFactory> {
     seed: u64,
     /// The side of the blocks whose pixels reuse each other's paths (1: none).
     reuse: u32,
+    /// The learned roulette and splitting of `--roulette ears` (`None`: classic roulette).
+    rrs: Option<RrsKernel<'a>>,
+}
+
+/// What the tile kernel gives `--roulette ears`'s paths: the learned factors, each pixel's
+/// `1/√(Î² + 0.01)` (row-major; empty: one, in the first training iteration), and whether the
+/// continuations are recorded (training).
+#[derive(Clone, Copy)]
+pub(super) struct RrsKernel<'a> {
+    pub(super) learned: RrsLearned<'a>,
+    pub(super) pixel_norm: &'a [Vec3],
+    pub(super) record: bool,
 }
 
 impl<F: SamplerFactory> Clone for Kernel<'_, F> {
@@ -117,7 +134,13 @@ impl<'a, F: SamplerFactory> Kernel<'a, F> {
             progress,
             seed: settings.seed,
             reuse: settings.reuse,
+            rrs: None,
         }
+    }
+
+    /// The same kernel with `--roulette ears`'s learned factors.
+    pub(super) fn with_rrs(self, rrs: Option<RrsKernel<'a>>) -> Self {
+        Kernel { rrs, ..self }
     }
 
     /// The same kernel with the samplers of seed `seed` (a replicate's, a training iteration's).
@@ -179,6 +202,7 @@ impl<'a, F: SamplerFactory> Kernel<'a, F> {
             time: Duration::ZERO,
             cut: false,
             records: Vec::new(),
+            rrs_records: Vec::new(),
             stack: TraceStack::default(),
         }
     }
@@ -416,16 +440,38 @@ impl<'a, F: SamplerFactory> Kernel<'a, F> {
                 return None;
             }
             let ray = self.camera_ray(pixel, index, sampler, &mut tile.rays);
-            let l = radiance_guided(
-                self.scene,
-                ray,
-                sampler,
-                &self.integrator,
-                &mut tile.rays,
-                &mut tile.stack,
-                self.guide.tree,
-                self.guide.record.then_some(&mut tile.records),
-            );
+            let l = if let Some(r) = &self.rrs {
+                let i = (pixel.y * self.width + pixel.x) as usize;
+                let mut path = RrsPath {
+                    learned: r.learned,
+                    pixel_norm: r.pixel_norm.get(i).copied().unwrap_or(Vec3::ONE),
+                    extra: MAX_EXTRA_BRANCHES,
+                    records: r.record.then_some(&mut tile.rrs_records),
+                };
+                let (rays, stack) = (&mut tile.rays, &mut tile.stack);
+                let guide = self.guide.tree;
+                radiance_rrs(
+                    self.scene,
+                    ray,
+                    sampler,
+                    &self.integrator,
+                    rays,
+                    stack,
+                    guide,
+                    &mut path,
+                )
+            } else {
+                radiance_guided(
+                    self.scene,
+                    ray,
+                    sampler,
+                    &self.integrator,
+                    &mut tile.rays,
+                    &mut tile.stack,
+                    self.guide.tree,
+                    self.guide.record.then_some(&mut tile.records),
+                )
+            };
             if l.is_finite() {
                 let v = l.as_dvec3();
                 sum += v;
@@ -448,10 +494,12 @@ fn gather(tiles: Vec<Tile>, mut film: Option<&mut Film>) -> BatchOutput {
         stats: RenderStats::default(),
         cut: false,
         records: Vec::with_capacity(tiles.iter().map(|t| t.records.len()).sum()),
+        rrs_records: Vec::with_capacity(tiles.iter().map(|t| t.rrs_records.len()).sum()),
         total: DVec3::ZERO,
     };
     for mut tile in tiles {
         out.records.append(&mut tile.records);
+        out.rrs_records.append(&mut tile.rrs_records);
         // the pixels a tile rendered, in its order (all of them unless it was cut short)
         let w = tile.size.x as usize;
         match film.as_deref_mut() {

@@ -199,7 +199,7 @@ pub fn learn_guide(scene: &Scene, settings: &RenderSettings) -> Result<(Guide, R
 }
 
 /// The bounding box of the scene's triangles.
-fn scene_bounds(scene: &Scene) -> (glam::Vec3, glam::Vec3) {
+pub(super) fn scene_bounds(scene: &Scene) -> (glam::Vec3, glam::Vec3) {
     let (mut lo, mut hi) = (
         glam::Vec3::splat(f32::INFINITY),
         glam::Vec3::splat(-f32::INFINITY),

@@ -20,6 +20,7 @@ mod real_scenes;
 mod render_core;
 mod report_browser;
 mod reuse;
+mod roulette;
 mod scale_out;
 mod scene_loading;
 mod sobol;

@@ -31,7 +31,7 @@ const BLOCK: u32 = 4;
 
 /// Per region of `BLOCK`² pixels (row-major) and channel: the mean of the pixels' means, and
 /// the variance of that mean for a film of independent pixels.
-fn regions(film: &Film) -> Vec<[(f64, f64); 3]> {
+pub(crate) fn regions(film: &Film) -> Vec<[(f64, f64); 3]> {
     let (nx, ny) = (film.width / BLOCK, film.height / BLOCK);
     let k = (BLOCK * BLOCK) as f64;
     let mut out = Vec::new();
@@ -58,7 +58,7 @@ fn regions(film: &Film) -> Vec<[(f64, f64); 3]> {
 /// `seed..`) against `reference`, printing the worst; and how many region-channels the
 /// renders lit (a spread above zero: a region-channel without any is black in the reference
 /// too and must match it).
-fn smallest_p(
+pub(crate) fn smallest_p(
     scene: &Scene,
     settings: &RenderSettings,
     seed: u64,
@@ -97,8 +97,8 @@ fn smallest_p(
         }
     }
     eprintln!(
-        "reuse {} {}: worst t {worst_t:.2} (p {smallest:.2e}) over {lit} region-channels",
-        settings.reuse, settings.strategy
+        "reuse {}, {} roulette, {}: worst t {worst_t:.2} (p {smallest:.2e}) over {lit} region-channels",
+        settings.reuse, settings.roulette, settings.strategy
     );
     (smallest, lit)
 }

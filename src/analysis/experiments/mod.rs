@@ -313,6 +313,7 @@ fn run_settings(st: &Entry, s: &ExperimentSettings, spp: u32, seed: u64) -> Rend
         time_traces: false,
         replicates: st.replicates,
         reuse: st.reuse,
+        roulette: crate::integrator::rrs::Roulette::Classic,
     }
 }
 
