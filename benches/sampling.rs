@@ -289,8 +289,68 @@ fn guide(c: &mut Criterion) {
     g.finish();
 }
 
+/// One EARS decision (`--roulette ears`): the factor at a vertex, its octree lookup (the
+/// deepest node on the way down that has learned the outgoing direction's bin) and the rule,
+/// on a cache taught 10⁶ records spread over the unit box with a bright corner (two
+/// iterations: 73 nodes, the 64 cells it starts with split where a bin passed 4096
+/// records), at points spread the same way: about 22 ns a decision (criterion, 2-core EPYC).
+fn ears(c: &mut Criterion) {
+    use glam::Vec3;
+    use vrpt::integrator::rrs::{direction_bin, RrsCache, RrsLearned, RrsPath, RrsRecord};
+    let mut cache = RrsCache::new(Vec3::ZERO, Vec3::ONE);
+    let point = |i: u32| {
+        let f = |k: f32| (i as f32 * k).fract();
+        Vec3::new(f(0.754_877_7), f(0.569_840_3), f(0.438_579_6))
+    };
+    for _ in 0..2 {
+        for i in 0..500_000u32 {
+            let p = point(i);
+            let lr = Vec3::splat(if p.max_element() > 0.9 { 10.0 } else { 0.1 } * (i % 3) as f32);
+            let r = RrsRecord {
+                p,
+                bin: (i % 16) as u8,
+                first: false,
+                lr,
+                cost: 2.0 + (i % 5) as f32,
+            };
+            cache.add(&r);
+        }
+        cache.finish_iteration();
+    }
+    let path = RrsPath {
+        learned: RrsLearned {
+            cache: Some(&cache),
+            image: 3.0,
+        },
+        pixel_norm: Vec3::splat(2.0),
+        extra: 64,
+        records: None,
+    };
+    let at: Vec<(Vec3, u8, Vec3)> = (0..SAMPLES)
+        .map(|i| {
+            let p = point(i * 7 + 3);
+            let wo = Vec3::new(p.y - 0.5, p.z - 0.5, p.x - 0.5).normalize();
+            (p, direction_bin(wo), Vec3::splat(0.2 + p.x))
+        })
+        .collect();
+    let mut g = c.benchmark_group("ears");
+    g.warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(2))
+        .throughput(Throughput::Elements(SAMPLES as u64));
+    eprintln!("ears: a cache of {} nodes", cache.len());
+    g.bench_function("factor", |b| {
+        b.iter(|| {
+            at.iter()
+                .map(|&(p, bin, beta)| path.factor(p, bin, beta, 2))
+                .sum::<f32>()
+        })
+    });
+    g.finish();
+}
+
 criterion_group!(
     benches,
+    ears,
     samplers,
     samplers_in_pixels,
     warps,

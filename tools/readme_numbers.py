@@ -465,6 +465,32 @@ def reuse():
     print("\nGeometric mean of the gain: " + ", ".join(f"K = {k} {geo[k]:.2f}×" for k in ks) + ".")
 
 
+ROULETTE_SCENES = ["cornell-box", "night-hall", "gap", "door", "glossy-plates", "sun-sky"]
+
+
+@section("roulette")
+def roulette():
+    """docs/roulette.md's table: `--roulette ears` against classic roulette at equal time, 10 s,
+    each shipped scene at its own size, relMSE from seed pairs, EARS's continuations at the
+    first vertex from `--stats`."""
+    print("`vrpt render scenes/SCENE --spp 1048576 --time-limit 10 --seed S [--roulette ears]`, seed "
+          "pairs (1, 2) and (3, 4), configs interleaved; ratio = relMSE(classic) / relMSE(ears):\n")
+    configs = [("classic", []), ("ears", ["--roulette", "ears"])]
+    rows, ratios = [], []
+    for scene in ROULETTE_SCENES:
+        log = []
+        r = equal_time_pairs(scene, None, None, 10, configs, log=log)
+        c, e = r["classic"][0], r["ears"][0]
+        splits = [float(m.group(1)) for label, err in log if label == "ears"
+                  for m in [re.search(r"([0-9.]+) continuations at the first vertex", err)] if m]
+        ratios.append(c / e)
+        rows.append([scene, g(c), g(e), f"{c / e:.2f}×", f"{statistics.mean(splits):.2f}"])
+        print(f"  {scene}: {rows[-1]}", file=sys.stderr, flush=True)
+    print(table(["scene", "classic", "ears", "ratio", "continuations at the first vertex"], rows))
+    geo = math.exp(statistics.mean(math.log(x) for x in ratios))
+    print(f"\nGeometric mean of the ratio: {geo:.2f}×.")
+
+
 @section("auto")
 def auto():
     """`--strategy auto` against its candidates and guided directions at equal time as a user

@@ -41,6 +41,7 @@ def test_the_readme_line_renders_the_cornell_box_at_its_size():
         (["--directions", "guided", "--replicates", "2"], dict(directions="guided", replicates=2)),
         (["--strategy", "nee", "--adaptive"], dict(strategy="nee", adaptive=True)),
         (["--sampler", "sobol", "--max-depth", "3"], dict(sampler="sobol", max_depth=3)),
+        (["--roulette", "ears"], dict(roulette="ears")),
     ],
 )
 def test_arrays_and_metadata_match_the_cli_exr_bit_for_bit(tmp_path, flags, kwargs):

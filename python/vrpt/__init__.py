@@ -260,6 +260,7 @@ def render(
     min_allocation_gain: Optional[float] = None,
     target_error: Optional[float] = None,
     reuse: Optional[int] = None,
+    roulette: Optional[str] = None,
     threads: Optional[int] = None,
     strict: bool = False,
     stats: bool = False,
@@ -272,7 +273,8 @@ def render(
     vrpt's default) or ``auto`` (a pilot chooses among ``auto_candidates``, strategies with
     ``+reuseK`` for path reuse such as ``"mis,mis+reuse4"``, the default; what it measured is in
     ``summary`` and ``metadata["auto"]``), and ``sampler``, ``directions`` (``guided`` for path
-    guiding), ``lights``, ``light_points``, ``light_choice`` set one part of it.
+    guiding), ``lights``, ``light_points``, ``light_choice`` set one part of it. ``roulette`` is
+    ``classic`` or ``ears`` (efficiency-aware roulette and splitting, learned while rendering).
     ``sampler`` may also be a function of your own (see ``SamplerFunction``): slow, since Python
     draws every number, but rendered through the same entry as vrpt's samplers. ``shard`` is
     ``(i, n)``. The image is kept in memory; ``Render.save`` writes it.
@@ -300,6 +302,7 @@ def render(
         min_allocation_gain=min_allocation_gain,
         target_error=target_error,
         reuse=reuse,
+        roulette=roulette,
         threads=threads,
         strict=strict,
         stats=stats,

@@ -36,8 +36,10 @@
 //!
 //! Mirror and glass vertices keep their classic roulette; the first vertex takes part (the
 //! paper's `rrDepth` 1), so the camera ray's cost is shared by the continuations it splits
-//! into. Classic roulette ([`Roulette::Classic`], the default) is the loop of
-//! [`super::Path::trace`].
+//! into. The first continuation of a vertex draws from the sampler as a classic path would
+//! (it keeps the layout, and a stratified sampler's strata); the others draw from independent
+//! streams keyed by the vertex. Classic roulette ([`Roulette::Classic`], the default) is the
+//! integrator's path loop; the tree of continuations is `integrator/branching.rs`.
 
 #[cfg(doc)]
 use crate::guiding::dir_to_canonical;

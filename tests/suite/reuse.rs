@@ -6,7 +6,7 @@
 //! block), so here each region's mean is measured by `RUNS` independent renders (seeds), and
 //! `t = (x̄ − r) / √(s²/RUNS + v_r)` with `s²` the spread of the runs' region means and `v_r`
 //! the reference's variance of its region mean (a render without reuse, whose pixels are
-//! independent). Each run's region mean averages 16 pixels × 512 samples, close to normal, so
+//! independent). Each run's region mean averages 16 pixels × 256 samples, close to normal, so
 //! `t` follows Student's t with `RUNS − 1` degrees of freedom; the test fails a region-channel
 //! whose two-sided p is below Šidák's α = 0.001 over every test. The weights' power — that a
 //! wrong weight is caught — is tested on the estimator itself, where it is exact (a weight 1.05×
@@ -105,9 +105,9 @@ pub(crate) fn smallest_p(
 
 /// The shipped Cornell box (16×16, depth 8) and door (16×12, depth 10) with reuse in blocks of
 /// 2 (MIS), 3 (NEE with cosine directions and independent points) and 4 (MIS with guided
-/// directions), agree
-/// with an 8192-spp render without reuse, region by region. (A tail whose continuation kept
-/// its pixel's throughput, a bug this test caught, read t = −46 at twice these spp.)
+/// directions), agree with an 8192-spp render without reuse, region by region. (A tail whose
+/// continuation kept its pixel's throughput, a bug this test caught, read t = −46 at four times
+/// these spp, so about −23 at these; 256 spp, not 512, since the EARS tests joined the suite.)
 #[test]
 fn reuse_agrees_with_the_path_tracer_on_the_cornell_box_and_the_door() {
     use LightStrategy::{Mis, Nee};
@@ -144,7 +144,7 @@ fn reuse_agrees_with_the_path_tracer_on_the_cornell_box_and_the_door() {
         let base = RenderSettings {
             width: w,
             height: h,
-            spp: 512,
+            spp: 256,
             max_depth,
             ..Default::default()
         };
