@@ -466,12 +466,29 @@ fn spp_map(samples: &[u32], (w, h): (u32, u32)) -> Result<(Canvas, (f64, f64))> 
     let map: Vec<f64> = samples.iter().map(|&n| n as f64).collect();
     let lo = map.iter().copied().fold(f64::INFINITY, f64::min).max(1.0);
     let hi = map.iter().copied().fold(0.0, f64::max).max(lo * 10.0);
-    let colours = false_colour(&map, lo, hi);
+    let c = value_map(&map, (w, h), (lo, hi), "samples per pixel, log scale")?;
+    Ok((c, (lo, hi)))
+}
+
+/// A `w × h` map of positive values (row-major) in false colour on the log scale `lo..hi`,
+/// over its colour bar titled `title`.
+fn value_map(map: &[f64], (w, h): (u32, u32), (lo, hi): (f64, f64), title: &str) -> Result<Canvas> {
+    let colours = false_colour(map, lo, hi);
     let scale = (256 / w.max(h)).max(1);
     let mut c = Canvas::new((w * scale).max(420), h * scale + BAR_H);
     c.blit(0, 0, w, h, scale, &|k| colours[k]);
-    c.colour_bar(0, h * scale, lo, hi, "samples per pixel, log scale")?;
-    Ok((c, (lo, hi)))
+    c.colour_bar(0, h * scale, lo, hi, title)?;
+    Ok(c)
+}
+
+/// Write `--roulette ears`'s learned factor at each pixel's first vertex (row-major; 0 where
+/// there is none, drawn as the scale's bottom) as a false-colour PNG on the log scale of the
+/// factor's whole range, 0.05 to 20, so maps of different scenes compare.
+pub fn write_ears_map(path: &Path, map: &[f32], (w, h): (u32, u32)) -> Result<()> {
+    let (lo, hi) = crate::integrator::rrs::FACTOR_RANGE;
+    let map: Vec<f64> = map.iter().map(|&n| n as f64).collect();
+    let title = "EARS factor at the first vertex, log scale";
+    value_map(&map, (w, h), (lo as f64, hi as f64), title)?.write(path)
 }
 
 /// Write two directional densities side by side as one false-colour PNG (log scale, shared):

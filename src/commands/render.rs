@@ -4,7 +4,7 @@
 
 pub use super::black::{why_black, BLACK_LUMINANCE};
 use super::ImageArgs;
-use crate::analysis::plots::write_spp_map;
+use crate::analysis::plots::{write_ears_map, write_spp_map};
 use crate::error::{Error, Result};
 use crate::estimate::ErrorEstimate;
 use crate::film::Film;
@@ -79,6 +79,10 @@ pub struct RenderRequest {
     /// up to 20 continuations where that pays [default: classic]
     #[arg(long, value_name = "KIND")]
     pub roulette: Option<crate::integrator::rrs::Roulette>,
+    /// With --roulette ears: also write the learned factor at each pixel's first vertex (over
+    /// 1: the paths split there; under 1: they end more often) as a false-colour PNG.
+    #[arg(long, value_name = "PNG")]
+    pub ears_map: Option<PathBuf>,
     /// Exposure of the PNG, in stops (pixels × 2^EXPOSURE before tone mapping), within ±64.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = parse_exposure)]
     pub exposure: f32,
@@ -142,6 +146,7 @@ pub struct PreparedRender {
     exposure: f32,
     variance: Option<PathBuf>,
     spp_map: Option<PathBuf>,
+    ears_map: Option<PathBuf>,
     time_limit: Option<f64>,
     shard: Option<(u32, u32)>,
     /// `--strategy auto`'s candidates (the settings are then the first's, until chosen).
@@ -218,6 +223,7 @@ impl RenderRequest {
             ("-o", &self.output),
             ("--variance", &self.variance),
             ("--spp-map", &self.error.spp_map),
+            ("--ears-map", &self.ears_map),
         ];
         if let Some((flag, _)) = named.iter().find(|(_, p)| p.is_some()) {
             return Err(Error::Settings(format!(
@@ -248,6 +254,7 @@ impl RenderRequest {
             exposure: self.exposure,
             variance: self.variance.clone(),
             spp_map: self.error.spp_map.clone(),
+            ears_map: self.ears_map.clone(),
             time_limit: self.time_limit,
             shard: self.shard,
             auto: self.candidates()?,
@@ -267,18 +274,31 @@ impl RenderRequest {
                 )));
             }
         }
-        if let Some(p) = &self.error.spp_map {
-            if check_image_path(p)? != Format::Png {
-                return Err(Error::Settings(format!(
-                    "--spp-map {}: the spp map is a .png",
-                    p.display()
-                )));
+        let maps = [
+            ("--spp-map", "spp map", &self.error.spp_map),
+            ("--ears-map", "EARS map", &self.ears_map),
+        ];
+        for (flag, what, map) in maps {
+            if let Some(p) = map {
+                if check_image_path(p)? != Format::Png {
+                    return Err(Error::Settings(format!(
+                        "{flag} {}: the {what} is a .png",
+                        p.display()
+                    )));
+                }
             }
+        }
+        if self.ears_map.is_some() && self.roulette != Some(crate::integrator::rrs::Roulette::Ears)
+        {
+            return Err(Error::Settings(
+                "--ears-map: only --roulette ears learns splitting factors to draw".into(),
+            ));
         }
         let mut outputs: Vec<NamedPath> = vec![("-o", output)];
         outputs.extend(super::given(&[
             ("--variance", &self.variance),
             ("--spp-map", &self.error.spp_map),
+            ("--ears-map", &self.ears_map),
         ]));
         let toml = self.scene.join("scene.toml");
         let mut inputs = vec![("SCENE", self.scene.as_path())];
@@ -498,6 +518,9 @@ impl PreparedRender {
         }
         if let Some(p) = &self.spp_map {
             write_spp_map(p, &r.film.sample_counts(), (r.film.width, r.film.height))?;
+        }
+        if let (Some(p), Some(map)) = (&self.ears_map, &r.ears_map) {
+            write_ears_map(p, map, (r.film.width, r.film.height))?;
         }
         let bar = (self.plan.min_allocation_gain).unwrap_or(crate::estimate::ALLOCATE_ABOVE);
         let adaptive = adaptive_summary(&r, bar);

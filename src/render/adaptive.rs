@@ -300,6 +300,7 @@ impl<F: SamplerFactory> Job<'_, F> {
             uniform_rounds: 0,
             finished_uniformly: Some(gain),
             allocation: None,
+            ears_map: None,
         })
     }
 }
@@ -357,6 +358,7 @@ impl Rounds {
             uniform_rounds: self.uniform_rounds,
             finished_uniformly: None,
             allocation: Some(gains),
+            ears_map: None,
         }
     }
 }

@@ -391,6 +391,9 @@ pub struct Rendered {
     /// An adaptive render's bounds on its relMSE gain over uniform sampling, from its own
     /// estimates ([`crate::estimate::allocation_gains`]).
     pub allocation: Option<crate::estimate::AllocationGains>,
+    /// Under `--roulette ears`: the learned factor at the first vertex of each pixel's central
+    /// ray (row-major; 0 where there is no Phong vertex), the cache made visible.
+    pub ears_map: Option<Vec<f32>>,
 }
 
 /// The pass that holds sample `done` (relative to the render's first sample) of a render of
@@ -540,6 +543,8 @@ pub fn render_passes_with<F: SamplerFactory>(
             r.final_time = stats.elapsed - training;
         }
         r.stats = stats;
+        r.ears_map = (rrs.as_ref())
+            .map(|s| s.first_vertex_map(scene, &camera, (settings.width, settings.height)));
         Ok(r)
     })?
 }

@@ -108,6 +108,7 @@ impl<F: SamplerFactory> Job<'_, F> {
             uniform_rounds: 0,
             finished_uniformly: None,
             allocation: None,
+            ears_map: None,
         })
     }
 

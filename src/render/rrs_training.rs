@@ -17,7 +17,7 @@
 
 use super::tile::RrsKernel;
 use super::*;
-use crate::integrator::rrs::{RrsCache, RrsLearned};
+use crate::integrator::rrs::{direction_bin, RrsCache, RrsLearned, RrsPath, MAX_EXTRA_BRANCHES};
 use glam::Vec3;
 
 /// What `--roulette ears` learned before the image.
@@ -28,6 +28,47 @@ pub(super) struct RrsState {
 }
 
 impl RrsState {
+    /// The factor `n` ([`RrsPath::factor`]) at the first vertex of the ray through each
+    /// pixel's centre, for a path of throughput one there (row-major, `width × height`): the
+    /// cache made visible, over 1 where the camera's paths split and under 1 where they end
+    /// more often. 0 where the ray escapes or meets a mirror, glass or a black surface (no
+    /// Phong vertex to split).
+    pub(super) fn first_vertex_map(
+        &self,
+        scene: &Scene,
+        camera: &Camera,
+        (w, h): (u32, u32),
+    ) -> Vec<f32> {
+        let mut stack = TraceStack::default();
+        let learned = self.kernel().learned;
+        let mut map = Vec::with_capacity((w * h) as usize);
+        for y in 0..h {
+            for x in 0..w {
+                let (o, d) = camera.generate_ray(glam::UVec2::new(x, y), glam::Vec2::splat(0.5));
+                let i = (y * w + x) as usize;
+                let n = scene
+                    .intersect(&mut stack, o, d, f32::INFINITY)
+                    .map_or(0.0, |hit| {
+                        let s = scene.surface(&hit);
+                        let m = scene.material_at(&s);
+                        let delta = m.specular.is_some_and(|d| !d.is_black());
+                        if delta || scene.bsdf_at(&s).is_black() {
+                            return 0.0;
+                        }
+                        let path = RrsPath {
+                            learned,
+                            pixel_norm: self.pixel_norm.get(i).copied().unwrap_or(Vec3::ONE),
+                            extra: MAX_EXTRA_BRANCHES,
+                            records: None,
+                        };
+                        path.factor(s.p, direction_bin(-d), Vec3::ONE, 1)
+                    });
+                map.push(n);
+            }
+        }
+        map
+    }
+
     /// What the tile kernel renders the image with.
     pub(super) fn kernel(&self) -> RrsKernel<'_> {
         RrsKernel {
@@ -188,7 +229,7 @@ impl<F: SamplerFactory> Trainer<'_, F> {
                     c[..n].sort_unstable_by(f32::total_cmp);
                     c[n / 2]
                 }));
-                let d = est * est + Vec3::splat(crate::analysis::metrics::REL_EPSILON as f32);
+                let d = est * est + Vec3::splat(crate::estimate::REL_EPSILON as f32);
                 let i = (y * w + x) as usize;
                 norm.push(d.map(|d| 1.0 / d.sqrt()));
                 let var = film.sample_variance(i).as_vec3();

@@ -122,6 +122,24 @@ fn ears_gives_the_same_image_on_any_number_of_threads() {
     let r = stats.rrs.expect("ears stats");
     assert!(r.iterations >= 2 && r.nodes > 0, "{r:?}");
     assert!(r.first_split > 1.0, "the box's first vertices split: {r:?}");
+    // the map of the first vertex's factor: one per pixel, 0 or within the clamp, and the
+    // box's walls split
+    let map = vrpt::render::render_passes(
+        &scene,
+        &base,
+        &vrpt::render::PassPlan::default(),
+        &vrpt::render::NoProgress,
+    )
+    .unwrap()
+    .ears_map
+    .expect("a map under ears");
+    assert_eq!(map.len(), (base.width * base.height) as usize);
+    let (lo, hi) = vrpt::integrator::rrs::FACTOR_RANGE;
+    assert!(map.iter().all(|&n| n == 0.0 || (lo..=hi).contains(&n)));
+    assert!(
+        map.iter().filter(|&&n| n > 1.0).count() > map.len() / 4,
+        "{map:?}"
+    );
     let (classic, _) = render_quiet(
         &scene,
         &RenderSettings {
@@ -159,4 +177,42 @@ fn ears_refuses_reuse_and_deep_paths() {
         ..base.clone()
     });
     assert!(e.contains("--max-depth"), "{e}");
+}
+
+/// `--ears-map` writes the map as a PNG of the image's size (scaled up, with its colour bar),
+/// and is refused without `--roulette ears`, or to a file that is not a PNG.
+#[test]
+fn the_ears_map_is_written_and_refused_without_ears() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = common::shipped_path("cornell-box");
+    let s = s.to_str().unwrap();
+    let (png, map) = (dir.path().join("a.png"), dir.path().join("map.png"));
+    let (png, map) = (png.to_str().unwrap(), map.to_str().unwrap());
+    let base = [
+        "render", s, "--width", "16", "--height", "16", "--spp", "8", "-o", png,
+    ];
+    let ears = ["--roulette", "ears", "--ears-map", map, "--stats"];
+    let ok = common::vrpt_ok(&[&base[..], &ears].concat());
+    assert!(String::from_utf8_lossy(&ok.stderr).contains("continuations at the first vertex"));
+    let img = image::open(map).unwrap();
+    assert!(
+        img.width() >= 256 && img.height() > 256,
+        "{}×{}",
+        img.width(),
+        img.height()
+    );
+    let refused = common::vrpt(&[&base[..], &["--ears-map", map]].concat());
+    let err = String::from_utf8_lossy(&refused.stderr);
+    assert!(
+        !refused.status.success() && err.contains("--roulette ears"),
+        "{err}"
+    );
+    let bad = dir.path().join("map.exr");
+    let args = ["--roulette", "ears", "--ears-map", bad.to_str().unwrap()];
+    let refused = common::vrpt(&[&base[..], &args].concat());
+    let err = String::from_utf8_lossy(&refused.stderr);
+    assert!(
+        !refused.status.success() && err.contains("EARS map is a .png"),
+        "{err}"
+    );
 }
