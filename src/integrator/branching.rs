@@ -40,26 +40,18 @@ impl<'a> Path<'a> {
         let (scene, settings) = (self.scene, self.settings);
         let (mut l, mut beta) = (Vec3::ZERO, Vec3::ONE);
         for segment in first..=settings.max_depth {
-            *if prev.is_none() {
-                &mut rays.camera
-            } else {
-                &mut rays.bounce
-            } += 1;
-            let hit = timed(settings.time_traces, rays, || {
-                scene.intersect(stack, origin, dir, f32::INFINITY)
-            });
-            rays.mark(Phase::Trace);
-            let Some(hit) = hit else {
-                let w = self.emission_weight(prev, |v| self.lights.environment_pdf(v.n, dir));
-                l += beta * scene.environment().radiance(dir) * w;
-                break;
+            let (_, s, wo, front) = match self.reach(prev, (origin, dir), rays, stack) {
+                Reached::Escaped(le, w) => {
+                    l += beta * le * w;
+                    break;
+                }
+                Reached::Surface(at, emitted) => {
+                    if let Some((le, w)) = emitted {
+                        l += beta * le * w;
+                    }
+                    at
+                }
             };
-            let s = scene.surface(&hit);
-            let wo = -dir;
-            let front = s.ng.dot(wo) > 0.0;
-            if let Some((le, w)) = self.emitted(prev, hit.prim, &s, front) {
-                l += beta * le * w;
-            }
             if segment == settings.max_depth {
                 rays.mark(Phase::Shade);
                 break;

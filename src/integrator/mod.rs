@@ -120,6 +120,14 @@ struct PathState {
     prev: Option<Previous>,
 }
 
+/// Where a path's ray ends ([`Path::reach`]): escaped, with the environment's radiance and its
+/// MIS weight; or at a surface (`t`, the point, `wo`, hit from its front), with what it emits
+/// toward the path and its weight, if anything.
+enum Reached {
+    Escaped(Vec3, f32),
+    Surface((f32, SurfacePoint, Vec3, bool), Option<(Vec3, f32)>),
+}
+
 /// The vertex a BSDF-sampled ray left from: what the MIS weight of what it hits needs.
 #[derive(Clone, Copy, Debug)]
 struct Previous {
@@ -331,26 +339,18 @@ impl<'a> Path<'a> {
             prev: None,
         };
         for segment in 1..=settings.max_depth {
-            *if st.prev.is_none() {
-                &mut rays.camera
-            } else {
-                &mut rays.bounce
-            } += 1;
-            let hit = timed(settings.time_traces, rays, || {
-                scene.intersect(stack, origin, dir, f32::INFINITY)
-            });
-            rays.mark(Phase::Trace);
-            let Some(hit) = hit else {
-                let w = self.emission_weight(st.prev, |v| self.lights.environment_pdf(v.n, dir));
-                st.l += st.beta * scene.environment().radiance(dir) * w;
-                break;
+            let (t, s, wo, front) = match self.reach(st.prev, (origin, dir), rays, stack) {
+                Reached::Escaped(le, w) => {
+                    st.l += st.beta * le * w;
+                    break;
+                }
+                Reached::Surface(at, emitted) => {
+                    if let Some((le, w)) = emitted {
+                        st.l += st.beta * le * w;
+                    }
+                    at
+                }
             };
-            let s = scene.surface(&hit);
-            let wo = -dir;
-            let front = s.ng.dot(wo) > 0.0;
-            if let Some((le, w)) = self.emitted(st.prev, hit.prim, &s, front) {
-                st.l += st.beta * le * w;
-            }
             if segment == settings.max_depth {
                 rays.mark(Phase::Shade);
                 break;
@@ -369,7 +369,7 @@ impl<'a> Path<'a> {
                 if bsdf.is_black() {
                     break;
                 }
-                let at = (segment, &s, front, wo, hit.t);
+                let at = (segment, &s, front, wo, t);
                 let (rec, split) = (rec.as_deref_mut(), split.as_deref_mut());
                 self.surface_vertex(at, &bsdf, sampler, rays, stack, rec, split, &mut st)
             };
@@ -383,6 +383,40 @@ impl<'a> Path<'a> {
             sp.finish(st.l, st.reusing);
         }
         st.l
+    }
+
+    /// Where the ray `(origin, dir)`, left from `prev` (`None`: the camera), ends, the ray
+    /// counted in `rays`: the environment's radiance and its weight
+    /// ([`Self::emission_weight`]) where it escapes, else the surface (`t` along the ray, the
+    /// point, `wo`, whether it was hit from its front) and what it emits toward the path with
+    /// its weight ([`Self::emitted`]).
+    #[inline(always)]
+    fn reach(
+        &self,
+        prev: Option<Previous>,
+        (origin, dir): (Vec3, Vec3),
+        rays: &mut RayCounts,
+        stack: &mut TraceStack,
+    ) -> Reached {
+        let scene = self.scene;
+        *if prev.is_none() {
+            &mut rays.camera
+        } else {
+            &mut rays.bounce
+        } += 1;
+        let hit = timed(self.settings.time_traces, rays, || {
+            scene.intersect(stack, origin, dir, f32::INFINITY)
+        });
+        rays.mark(Phase::Trace);
+        let Some(hit) = hit else {
+            let w = self.emission_weight(prev, |v| self.lights.environment_pdf(v.n, dir));
+            return Reached::Escaped(scene.environment().radiance(dir), w);
+        };
+        let s = scene.surface(&hit);
+        let wo = -dir;
+        let front = s.ng.dot(wo) > 0.0;
+        let emitted = self.emitted(prev, hit.prim, &s, front);
+        Reached::Surface((hit.t, s, wo, front), emitted)
     }
 
     /// The vertex ending segment `segment` at surface point `s` (hit from `wo`, from its
