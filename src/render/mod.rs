@@ -466,35 +466,7 @@ pub fn render_passes_with<F: SamplerFactory>(
     progress: &dyn Progress,
 ) -> Result<Rendered> {
     let camera = camera_for(scene, settings)?;
-    if settings.replicates == 0 {
-        return Err(Error::Settings("--replicates must be at least 1".into()));
-    }
-    if settings.replicates > settings.spp {
-        // every replicate (and every adaptive round of it) takes at least one sample per pixel
-        return Err(Error::Settings(format!(
-            "--replicates {} needs at least {} spp (a sample per replicate), but --spp is {}",
-            settings.replicates, settings.replicates, settings.spp
-        )));
-    }
-    if plan.adaptive && settings.replicates < 2 {
-        return Err(Error::Settings(
-            "--adaptive needs at least 2 replicates: it allocates from their spread".into(),
-        ));
-    }
-    if plan.adaptive && plan.shard.is_some() {
-        return Err(Error::Settings(
-            "--adaptive cannot render a shard: each round's allocation depends on every sample \
-             before it"
-                .into(),
-        ));
-    }
-    if let Some(e) = plan.target_error {
-        if !(e > 0.0 && e.is_finite()) {
-            return Err(Error::Settings(format!(
-                "--target-error {e}: the target relMSE must be a positive number"
-            )));
-        }
-    }
+    check_plan(settings, plan)?;
     let start = Instant::now();
     with_threads(settings.threads, || {
         let mut stats = RenderStats::default();
@@ -547,6 +519,41 @@ pub fn render_passes_with<F: SamplerFactory>(
             .map(|s| s.first_vertex_map(scene, &camera, (settings.width, settings.height)));
         Ok(r)
     })?
+}
+
+/// Whether `plan` can render `settings`: replicates that fit the spp, adaptive rounds with the
+/// replicates they allocate from and not in a shard, a positive target error.
+fn check_plan(settings: &RenderSettings, plan: &PassPlan) -> Result<()> {
+    if settings.replicates == 0 {
+        return Err(Error::Settings("--replicates must be at least 1".into()));
+    }
+    if settings.replicates > settings.spp {
+        // every replicate (and every adaptive round of it) takes at least one sample per pixel
+        return Err(Error::Settings(format!(
+            "--replicates {} needs at least {} spp (a sample per replicate), but --spp is {}",
+            settings.replicates, settings.replicates, settings.spp
+        )));
+    }
+    if plan.adaptive && settings.replicates < 2 {
+        return Err(Error::Settings(
+            "--adaptive needs at least 2 replicates: it allocates from their spread".into(),
+        ));
+    }
+    if plan.adaptive && plan.shard.is_some() {
+        return Err(Error::Settings(
+            "--adaptive cannot render a shard: each round's allocation depends on every sample \
+             before it"
+                .into(),
+        ));
+    }
+    if let Some(e) = plan.target_error {
+        if !(e > 0.0 && e.is_finite()) {
+            return Err(Error::Settings(format!(
+                "--target-error {e}: the target relMSE must be a positive number"
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// The seed of replicate `r` of a render with seed `seed`: the seed itself for replicate 0 (a
