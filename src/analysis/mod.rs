@@ -7,7 +7,9 @@
 //!   `converge` (error against spp, each spp rendered from scratch, with fitted slopes);
 //! - [`merge`]: renders made in pieces combined exactly into one reference;
 //! - [`fit`]: least-squares lines and log-log slopes;
-//! - [`plots`]: log-log convergence plots (SVG/PNG) and labelled image grids (PNG);
+//! - [`plots`]: log-log convergence and calibration plots (SVG/PNG);
+//! - [`maps`]: false-colour maps (error, samples per pixel, EARS factor, densities) and the
+//!   labelled image grid of a comparison (PNG);
 //! - [`points`]: a sampler's points in the unit square, their discrepancy and spectrum;
 //! - [`theory_plots`]: the pictures of `vrpt points` and `vrpt integrate`;
 //! - [`integrate`]: known-answer integrals by each sampler, against the variance formulas;
@@ -19,6 +21,7 @@ pub mod calibration;
 pub mod experiments;
 pub mod fit;
 pub mod integrate;
+pub mod maps;
 pub mod merge;
 pub mod metrics;
 pub mod plots;

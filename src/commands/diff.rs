@@ -3,10 +3,10 @@
 //! bias z-scores, the same per region, and optionally a false-colour error map and a report.
 
 use super::{RegionArgs, Written};
+use crate::analysis::maps::write_error_map;
 use crate::analysis::metrics::{
     image_bias, mean_relative_variance, mean_variance, metrics, region_metrics, ImageBias, Metrics,
 };
-use crate::analysis::plots::write_error_map;
 use crate::analysis::report::{number, Column, Report, Table};
 use crate::error::{Error, Result};
 use crate::image_io::{check_image_path, check_writable, read_exr, RgbImage};

@@ -7,7 +7,8 @@ use crate::analysis::experiments::{
     compare_entries, converge_entries, write_csv, Comparison, Convergence, Entry,
     ExperimentSettings,
 };
-use crate::analysis::plots::{convergence_svg, write_comparison_grid, write_convergence_plot};
+use crate::analysis::maps::write_comparison_grid;
+use crate::analysis::plots::{convergence_svg, write_convergence_plot};
 use crate::analysis::report::Report;
 use crate::error::{Error, Result};
 use crate::image_io::{

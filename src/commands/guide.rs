@@ -18,7 +18,7 @@
 //! `½ Σ |p − q| ΔA`, says how much of the sampling mass sits where the light does not come from.
 
 use super::{ImageArgs, Written};
-use crate::analysis::plots::write_density_pair;
+use crate::analysis::maps::write_density_pair;
 use crate::bsdf::Directions;
 use crate::camera::Camera;
 use crate::error::{Error, Result};

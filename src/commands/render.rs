@@ -4,7 +4,7 @@
 
 pub use super::black::{why_black, BLACK_LUMINANCE};
 use super::ImageArgs;
-use crate::analysis::plots::{write_ears_map, write_spp_map};
+use crate::analysis::maps::{write_ears_map, write_spp_map};
 use crate::error::{Error, Result};
 use crate::estimate::ErrorEstimate;
 use crate::film::Film;

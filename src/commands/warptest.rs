@@ -359,7 +359,7 @@ pub fn run(req: &WarptestRequest) -> Result<WarptestOutcome> {
             .iter()
             .map(|(l, a, b)| (l.clone(), &a[..], &b[..]))
             .collect();
-        crate::analysis::plots::write_density_rows(p, &view, (w, h))?;
+        crate::analysis::maps::write_density_rows(p, &view, (w, h))?;
         written.push(p.clone());
     }
     if let Some(p) = &req.json {

@@ -199,7 +199,7 @@ pub struct Report {
 }
 
 /// What an adaptive run spent where: its samples per pixel as a false-colour PNG with its
-/// colour bar ([`crate::analysis::plots::spp_map_png`]), base64 in the payload.
+/// colour bar ([`crate::analysis::maps::spp_map_png`]), base64 in the payload.
 #[derive(Clone, Debug, Serialize)]
 pub struct SppMap {
     /// The run's entry.
@@ -211,7 +211,7 @@ pub struct SppMap {
 impl SppMap {
     /// The map of `samples` (`w × h`, row-major) under `name`.
     pub fn new(name: &str, samples: &[u32], (w, h): (u32, u32)) -> Result<SppMap> {
-        let png = crate::analysis::plots::spp_map_png(samples, (w, h))?;
+        let png = crate::analysis::maps::spp_map_png(samples, (w, h))?;
         Ok(SppMap {
             name: name.into(),
             png: base64::engine::general_purpose::STANDARD.encode(png),
