@@ -64,7 +64,21 @@ pub(crate) fn smallest_p(
     seed: u64,
     reference: &[[(f64, f64); 3]],
 ) -> (f64, usize) {
-    let runs: Vec<Vec<[(f64, f64); 3]>> = (0..RUNS)
+    let runs = region_runs(scene, settings, seed);
+    let label = format!(
+        "reuse {}, {} roulette, {}",
+        settings.reuse, settings.roulette, settings.strategy
+    );
+    smallest_p_of(&runs, reference, &label)
+}
+
+/// The regions ([`regions`]) of `RUNS` renders of `settings` with seeds `seed..`.
+pub(crate) fn region_runs(
+    scene: &Scene,
+    settings: &RenderSettings,
+    seed: u64,
+) -> Vec<Vec<[(f64, f64); 3]>> {
+    (0..RUNS)
         .map(|r| {
             let (film, stats) = render_quiet(
                 scene,
@@ -76,8 +90,16 @@ pub(crate) fn smallest_p(
             assert_eq!(stats.nonfinite, 0);
             regions(&film)
         })
-        .collect();
-    let n = RUNS as f64;
+        .collect()
+}
+
+/// [`smallest_p`] of runs already rendered ([`region_runs`]), printed with `label`.
+pub(crate) fn smallest_p_of(
+    runs: &[Vec<[(f64, f64); 3]>],
+    reference: &[[(f64, f64); 3]],
+    label: &str,
+) -> (f64, usize) {
+    let n = runs.len() as f64;
     let (mut smallest, mut lit, mut worst_t) = (1.0f64, 0usize, 0.0f64);
     for k in 0..reference.len() {
         for c in 0..3 {
@@ -96,10 +118,7 @@ pub(crate) fn smallest_p(
             }
         }
     }
-    eprintln!(
-        "reuse {}, {} roulette, {}: worst t {worst_t:.2} (p {smallest:.2e}) over {lit} region-channels",
-        settings.reuse, settings.roulette, settings.strategy
-    );
+    eprintln!("{label}: worst t {worst_t:.2} (p {smallest:.2e}) over {lit} region-channels");
     (smallest, lit)
 }
 

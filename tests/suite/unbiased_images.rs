@@ -337,7 +337,7 @@ fn dimmed_lights(dir: &Path, name: &str) -> Scene {
 
 /// A copy of shipped scene `name` in `dir` with the colours of every line of its MTL that
 /// starts with one of `keys` (`Ke`, `Kd`, `Ks`) divided by `factor`.
-fn dimmed(dir: &Path, name: &str, keys: &[&str], factor: f32) -> Scene {
+pub(crate) fn dimmed(dir: &Path, name: &str, keys: &[&str], factor: f32) -> Scene {
     let src = common::shipped_path(name);
     for e in std::fs::read_dir(&src).unwrap() {
         let e = e.unwrap();
