@@ -331,6 +331,13 @@ impl RenderRequest {
                  (--auto-candidates mis,mis+reuse{k}), not with --reuse {k}"
             )));
         }
+        if self.roulette == Some(crate::integrator::rrs::Roulette::Ears) {
+            return Err(Error::Settings(
+                "--strategy auto chooses the roulette too: name it among the candidates \
+                 (--auto-candidates mis,mis+ears), not with --roulette ears"
+                    .into(),
+            ));
+        }
         if self.shard.is_some() || self.error.adaptive {
             return Err(Error::Settings(
                 "--strategy auto: not with --shard or --adaptive (the shards of one render, or \

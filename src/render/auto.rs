@@ -1,7 +1,7 @@
 //! `--strategy auto`: a render that chooses its own estimator from a pilot.
 //!
 //! A candidate ([`Candidate`]) is a strategy with path reuse in blocks of `K × K` pixels or
-//! without (`mis`, `mis+reuse4`). Each candidate renders a pilot of the same samples per pixel as
+//! without, or with efficiency-aware roulette and splitting (`mis`, `mis+reuse4`, `mis+ears`). Each candidate renders a pilot of the same samples per pixel as
 //! [`PILOT_REPLICATES`] independent replicates, with seeds of its own ([`pilot_seed`]) that no
 //! other render uses. A pilot gives the image's relMSE, estimated from its replicates' spread
 //! (honest for every sampler, [`crate::estimate`]), with a standard error from the spread of the
@@ -15,7 +15,8 @@
 //! The cost is the wall time under a time limit (such a render is not deterministic anyway),
 //! and otherwise a count of work: the rays traced, training rays included, with each shadow ray
 //! of a reuse connection weighed [`CONNECTION_COST`] (it is a shadow ray and two BSDF
-//! evaluations, no surface to shade; see the constant for the measurement). A count is the same
+//! evaluations, no surface to shade; see the constant for the measurement) and each ray of an
+//! EARS candidate weighed [`EARS_RAY_COST`] (its cache lookups and recursion). A count is the same
 //! for every thread count, so the choice, and the image, are too. Rays weigh a guided vertex's
 //! extra work (the guide's lookup and sampling) as nothing, so a guided candidate looks slightly
 //! cheaper by rays than by time.
@@ -31,12 +32,15 @@
 //! than one trained on all of them, so the pilot understates guiding at large budgets (it chose
 //! guided directions in none of 44 renders of the shipped scenes, where guided renders won up
 //! to 3.6×): guided directions are not among the default candidates. Path reuse learns nothing,
-//! so a pilot sees what the render will get.
+//! so a pilot sees what the render will get; EARS learns its factors from its pilot's own
+//! training, shorter than a render's, and is not a default candidate either (where it wins,
+//! `mis+reuse4` wins more: `docs/roulette.md`).
 
 use super::{render_passes, NoProgress, PassPlan, RenderSettings};
 use crate::error::Result;
 use crate::estimate::rel_mse_standard_error;
 use crate::integrator::reuse::MAX_REUSE;
+use crate::integrator::rrs::Roulette;
 use crate::scene::Scene;
 use crate::strategy::Strategy;
 use std::time::{Duration, Instant};
@@ -62,55 +66,94 @@ pub const SWITCH_Z: f64 = 2.0;
 /// on night-hall, where it overstates what reuse costs (a switch it makes is then safe).
 pub const CONNECTION_COST: f64 = 0.6;
 
-/// One of `--strategy auto`'s candidates: a strategy, and the side of its path-reuse blocks
-/// (1: none; [`crate::integrator::reuse`]). Named as the strategy with `+reuseK` after it when
-/// `K > 1`: `mis`, `mis+reuse4`, `stratified+guided+mis+reuse2`.
+/// What one ray of an EARS candidate (`+ears`) costs, in rays of the same strategy with classic
+/// roulette: its cache lookup at each vertex, the recursion of its continuations and their
+/// bookkeeping, the training's records. Measured on one thread, 128×96 at 32 spp (training
+/// included), time per ray with EARS over time per ray without, three runs each: Cornell box
+/// 1.34, door 1.24, glossy plates 1.17, night-hall 1.23; with 1.25 a pilot's cost is within
+/// about ±7% of its time on all four.
+pub const EARS_RAY_COST: f64 = 1.25;
+
+/// One of `--strategy auto`'s candidates: a strategy, the side of its path-reuse blocks (1:
+/// none; [`crate::integrator::reuse`]) and its roulette ([`Roulette`]). Named as the strategy
+/// with `+reuseK` after it when `K > 1`, or `+ears` with efficiency-aware roulette and
+/// splitting (the two do not combine: [`RenderSettings::roulette`]): `mis`, `mis+reuse4`,
+/// `stratified+guided+mis+reuse2`, `mis+ears`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Candidate {
     /// The sampler, directions and lights.
     pub strategy: Strategy,
     /// Path reuse in blocks of `reuse × reuse` pixels ([`RenderSettings::reuse`]; 1: off).
     pub reuse: u32,
+    /// Classic roulette, or EARS ([`RenderSettings::roulette`]).
+    pub roulette: Roulette,
 }
 
 impl From<Strategy> for Candidate {
     fn from(strategy: Strategy) -> Candidate {
-        Candidate { strategy, reuse: 1 }
+        Candidate {
+            strategy,
+            reuse: 1,
+            roulette: Roulette::Classic,
+        }
     }
 }
 
 impl std::fmt::Display for Candidate {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self.reuse {
-            1 => write!(f, "{}", self.strategy),
-            k => write!(f, "{}+reuse{k}", self.strategy),
+        write!(f, "{}", self.strategy)?;
+        if self.reuse > 1 {
+            write!(f, "+reuse{}", self.reuse)?;
         }
+        if self.roulette == Roulette::Ears {
+            f.write_str(EARS_SUFFIX)?;
+        }
+        Ok(())
     }
 }
 
+/// The suffix of a candidate with `--roulette ears`.
+const EARS_SUFFIX: &str = "+ears";
+
 impl Candidate {
-    /// Parse a strategy ([`Strategy::parse`]), optionally with `+reuseK` after it.
+    /// Parse a strategy ([`Strategy::parse`]), optionally with `+reuseK` or `+ears` after it.
     pub fn parse(s: &str) -> std::result::Result<Candidate, String> {
         let s = s.trim();
-        let Some((strategy, k)) = s.rsplit_once("+reuse") else {
-            return Strategy::parse(s).map(Candidate::from);
+        let (rest, roulette) = match s.strip_suffix(EARS_SUFFIX) {
+            Some(rest) => (rest, Roulette::Ears),
+            None => (s, Roulette::Classic),
+        };
+        let Some((strategy, k)) = rest.rsplit_once("+reuse") else {
+            let strategy = Strategy::parse(rest)?;
+            return Ok(Candidate {
+                roulette,
+                ..Candidate::from(strategy)
+            });
         };
         let reuse = (k.parse::<u32>().ok())
             .filter(|k| (1..=MAX_REUSE).contains(k))
             .ok_or_else(|| {
                 format!("'{s}': +reuseK takes K from 1 (off) to {MAX_REUSE}, not '{k}'")
             })?;
+        if reuse > 1 && roulette == Roulette::Ears {
+            return Err(format!(
+                "'{s}': +ears does not combine with +reuse{reuse} (--roulette ears with --reuse)"
+            ));
+        }
         Ok(Candidate {
             strategy: Strategy::parse(strategy)?,
             reuse,
+            roulette,
         })
     }
 
-    /// The settings that render this candidate: `settings` with its strategy and reuse.
+    /// The settings that render this candidate: `settings` with its strategy, reuse and
+    /// roulette.
     pub fn settings(&self, settings: &RenderSettings) -> RenderSettings {
         RenderSettings {
             strategy: self.strategy,
             reuse: self.reuse,
+            roulette: self.roulette,
             ..settings.clone()
         }
     }
@@ -143,8 +186,8 @@ pub fn default_candidates() -> Vec<Candidate> {
     vec![
         Candidate::from(mis),
         Candidate {
-            strategy: mis,
             reuse: AUTO_REUSE,
+            ..Candidate::from(mis)
         },
     ]
 }
@@ -265,7 +308,11 @@ pub fn choose(
         let spent = match cost {
             Cost::Rays => {
                 let connections = rays.connection as f64;
-                (rays.total() as f64 - connections) + CONNECTION_COST * connections
+                let weighed = (rays.total() as f64 - connections) + CONNECTION_COST * connections;
+                match candidates[k].roulette {
+                    Roulette::Ears => EARS_RAY_COST * weighed,
+                    Roulette::Classic => weighed,
+                }
             }
             Cost::Seconds => seconds,
         };
@@ -357,13 +404,23 @@ impl Choice {
             "  efficiency relative to {}; the best against it: z = {:.1} (switch above {SWITCH_Z}){}\n",
             self.rows.first().map_or(String::new(), |r| r.candidate.to_string()),
             self.z,
-            match self.cost {
-                Cost::Rays if self.rows.iter().any(|r| r.candidate.reuse > 1) => {
-                    format!("; a reuse connection's ray counts {CONNECTION_COST}")
-                }
-                _ => String::new(),
-            }
+            self.weights()
         )
+    }
+
+    /// What the table's rays weigh, when they are not all one: a reuse connection's shadow ray,
+    /// an EARS candidate's ray.
+    fn weights(&self) -> String {
+        let mut s = String::new();
+        if self.cost == Cost::Rays {
+            if self.rows.iter().any(|r| r.candidate.reuse > 1) {
+                s += &format!("; a reuse connection's ray counts {CONNECTION_COST}");
+            }
+            if (self.rows.iter()).any(|r| r.candidate.roulette == Roulette::Ears) {
+                s += &format!("; an EARS ray counts {EARS_RAY_COST}");
+            }
+        }
+        s
     }
 
     /// One line for the metadata: the choice, each candidate's relative efficiency, z, the
@@ -432,9 +489,11 @@ mod tests {
 
     #[test]
     fn candidates_are_named_as_parsed() {
-        let c = Candidates::parse("mis, mis+reuse4,stratified+guided+mis+reuse2,importance+reuse1")
-            .unwrap()
-            .0;
+        let c = Candidates::parse(
+            "mis, mis+reuse4,stratified+guided+mis+reuse2,importance+reuse1,stratified+guided+mis+ears",
+        )
+        .unwrap()
+        .0;
         let names: Vec<String> = c.iter().map(Candidate::to_string).collect();
         assert_eq!(
             names,
@@ -442,11 +501,16 @@ mod tests {
                 "mis",
                 "mis+reuse4",
                 "stratified+guided+mis+reuse2",
-                "importance"
+                "importance",
+                "stratified+guided+mis+ears"
             ]
         );
         assert_eq!(c[1].strategy, Strategy::default());
         assert_eq!((c[1].reuse, c[3].reuse), (4, 1));
+        assert_eq!(
+            (c[0].roulette, c[4].roulette),
+            (Roulette::Classic, Roulette::Ears)
+        );
         for n in &names {
             assert_eq!(Candidate::parse(n).unwrap().to_string(), *n);
         }
@@ -456,14 +520,21 @@ mod tests {
             "mis+reuse",
             "mis+reusex",
             "nosuch+reuse2",
+            "mis+reuse2+ears",
+            "mis+ears+reuse2",
+            "+ears",
         ] {
             assert!(Candidate::parse(bad).is_err(), "{bad}");
         }
         assert!(Candidate::parse("mis+reuse9")
             .unwrap_err()
             .contains("+reuseK"));
+        assert!(Candidate::parse("mis+reuse2+ears")
+            .unwrap_err()
+            .contains("does not combine"));
         let d = default_candidates();
         assert_eq!((d[0].reuse, d[1].reuse), (1, AUTO_REUSE));
+        assert!(d.iter().all(|c| c.roulette == Roulette::Classic));
     }
 
     #[test]
