@@ -2,7 +2,7 @@
 //! adaptive render spent per pixel, `--roulette ears`'s factor at the first vertex, a guide's
 //! directional densities and a warp's histograms, and the comparison grid (images over their
 //! error maps). Each map is a log colour scale ([`crate::analysis::metrics::false_colour`])
-//! with its colour bar and the bar's numeric range below it, drawn on an RGB8 [`Canvas`] and
+//! with its colour bar and the bar's numeric range below it, drawn on an RGB8 `Canvas` and
 //! written as PNG; text as in [`crate::analysis::plots`].
 
 use crate::analysis::experiments::Comparison;

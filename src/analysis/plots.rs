@@ -2,7 +2,7 @@
 //! per strategy and its fitted slope in the legend, and the calibration plot (an image's own
 //! error estimate against the error measured). Drawn with plotters; text uses the Hack font
 //! shipped as bytes by `epaint_default_fonts` (no system fonts needed), registered as
-//! "sans-serif", through [`Glyphs`] (which places each glyph at its side bearing). The
+//! "sans-serif", through `Glyphs` (which places each glyph at its side bearing). The
 //! false-colour maps and the image grid are in [`crate::analysis::maps`].
 
 use crate::analysis::experiments::Convergence;
