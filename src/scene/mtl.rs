@@ -55,7 +55,6 @@ pub fn parse(text: &str) -> Result<MtlText, String> {
         let mut words = line.split_whitespace();
         let Some(tag) = words.next() else { continue };
         let rest: Vec<&str> = words.collect();
-        let at = |what: String| format!("line {}: {what}: '{}'", no + 1, clip(line));
         if tag == "newmtl" {
             finish_tr(&mut out, tr.take())?;
             out.materials.push(MtlEntry {
@@ -79,54 +78,72 @@ pub fn parse(text: &str) -> Result<MtlText, String> {
             *out.skipped.entry(clip(tag).into_owned()).or_default() += 1;
             continue;
         };
-        match tag {
-            "Kd" | "Ks" | "Ke" | "Tf" => {
-                if is_other_colour_form(&rest) {
-                    *out.skipped.entry(format!("{tag} {}", rest[0])).or_default() += 1;
-                    continue;
-                }
-                let c = colour(tag, &rest).map_err(at)?;
-                let slot = match tag {
-                    "Kd" => &mut m.kd,
-                    "Ks" => &mut m.ks,
-                    "Ke" => &mut m.ke,
-                    _ => &mut m.tf,
-                };
-                *slot = Some(c);
-            }
-            "Ns" => m.ns = Some(number(tag, &rest, 0.0, 1e6).map_err(at)?),
-            "Ni" => m.ni = Some(number(tag, &rest, f32::MIN, f32::MAX).map_err(at)?),
-            "d" => {
-                // `d -halo 0.5`: the halo form, read as its value
-                let rest = match rest.first() {
-                    Some(&"-halo") => &rest[1..],
-                    _ => &rest[..],
-                };
-                m.d = Some(number(tag, rest, f32::MIN, f32::MAX).map_err(at)?);
-            }
-            "Tr" => tr = Some((no + 1, line.to_string())),
-            "illum" => {
-                let v = number(tag, &rest, 0.0, 10.0).map_err(at)?;
-                if v.fract() != 0.0 {
-                    return Err(at(format!("illum: {v} is not an integer from 0 to 10")));
-                }
-                m.illum = Some(v as u32);
-            }
-            _ => {
-                *out.skipped.entry(clip(tag).into_owned()).or_default() += 1;
-                if tag == "Ka" && !is_other_colour_form(&rest) {
-                    if let Err(e) = colour(tag, &rest) {
-                        out.notes.push(at(e));
-                    }
-                }
-            }
-        }
+        let words = (tag, rest.as_slice());
+        let (skipped, notes) = (&mut out.skipped, &mut out.notes);
+        statement(m, words, (no + 1, line), &mut tr, skipped, notes)?;
     }
     finish_tr(&mut out, tr)?;
     for opt in ignored {
         *out.skipped.entry(opt).or_default() += 1;
     }
     Ok(out)
+}
+
+/// One statement `tag rest…` of material `m` on line `no` (text `line`): its colour or number
+/// set, `Tr` kept in `tr` for [`finish_tr`], anything else counted in `skipped` (a malformed
+/// `Ka` noted in `notes` too); an error for a malformed value it reads.
+fn statement(
+    m: &mut MtlEntry,
+    (tag, rest): (&str, &[&str]),
+    (no, line): (usize, &str),
+    tr: &mut Option<(usize, String)>,
+    skipped: &mut BTreeMap<String, usize>,
+    notes: &mut Vec<String>,
+) -> Result<(), String> {
+    let at = |what: String| format!("line {no}: {what}: '{}'", clip(line));
+    match tag {
+        "Kd" | "Ks" | "Ke" | "Tf" => {
+            if is_other_colour_form(rest) {
+                *skipped.entry(format!("{tag} {}", rest[0])).or_default() += 1;
+                return Ok(());
+            }
+            let c = colour(tag, rest).map_err(at)?;
+            let slot = match tag {
+                "Kd" => &mut m.kd,
+                "Ks" => &mut m.ks,
+                "Ke" => &mut m.ke,
+                _ => &mut m.tf,
+            };
+            *slot = Some(c);
+        }
+        "Ns" => m.ns = Some(number(tag, rest, 0.0, 1e6).map_err(at)?),
+        "Ni" => m.ni = Some(number(tag, rest, f32::MIN, f32::MAX).map_err(at)?),
+        "d" => {
+            // `d -halo 0.5`: the halo form, read as its value
+            let rest = match rest.first() {
+                Some(&"-halo") => &rest[1..],
+                _ => rest,
+            };
+            m.d = Some(number(tag, rest, f32::MIN, f32::MAX).map_err(at)?);
+        }
+        "Tr" => *tr = Some((no, line.to_string())),
+        "illum" => {
+            let v = number(tag, rest, 0.0, 10.0).map_err(at)?;
+            if v.fract() != 0.0 {
+                return Err(at(format!("illum: {v} is not an integer from 0 to 10")));
+            }
+            m.illum = Some(v as u32);
+        }
+        _ => {
+            *skipped.entry(clip(tag).into_owned()).or_default() += 1;
+            if tag == "Ka" && !is_other_colour_form(rest) {
+                if let Err(e) = colour(tag, rest) {
+                    notes.push(at(e));
+                }
+            }
+        }
+    }
+    Ok(())
 }
 
 /// The block's `Tr` (line, text), read as `d = 1 − Tr` where the block gave no `d` (then a
