@@ -105,29 +105,7 @@ pub(super) fn read_text(path: &Path) -> Result<String> {
 /// Load `path` into a triangle soup, its materials, their textures and any warnings; with
 /// `strict` a leniency is an error (module doc).
 pub fn load_obj(path: &Path, strict: bool) -> Result<ObjFile> {
-    // refused with the estimate before the text is read, and before the mesh is built
-    let memory = |what: String, bytes: u64| {
-        crate::limits::check_bytes(&what, bytes).map_err(|e| Error::Scene {
-            path: path.to_path_buf(),
-            message: e.to_string().replace("invalid setting: ", ""),
-        })
-    };
-    let len = std::fs::metadata(path).map_or(0, |m| m.len());
-    memory(
-        format!("reading its {:.0} MB of text", len as f64 / 1e6),
-        len.saturating_mul(crate::limits::OBJ_BYTES_PER_TEXT_BYTE),
-    )?;
-    let text = read_text(path)?;
-    let obj = objparse::parse(&text).map_err(|message| Error::Obj {
-        path: path.to_path_buf(),
-        message,
-    })?;
-    drop(text);
-    let n = obj.triangles.len() as u64;
-    memory(
-        format!("a scene of {n} triangles"),
-        n.saturating_mul(crate::limits::SCENE_PEAK_BYTES_PER_TRIANGLE),
-    )?;
+    let obj = read_obj(path)?;
     let mut notes = Notes {
         strict,
         warnings: Vec::new(),
@@ -184,6 +162,34 @@ pub fn load_obj(path: &Path, strict: bool) -> Result<ObjFile> {
         libraries,
         warnings: notes.warnings,
     })
+}
+
+/// The OBJ at `path` read and parsed, within the memory limits: refused with the estimate
+/// before its text is read, and before its mesh is built.
+fn read_obj(path: &Path) -> Result<objparse::ObjText> {
+    let memory = |what: String, bytes: u64| {
+        crate::limits::check_bytes(&what, bytes).map_err(|e| Error::Scene {
+            path: path.to_path_buf(),
+            message: e.to_string().replace("invalid setting: ", ""),
+        })
+    };
+    let len = std::fs::metadata(path).map_or(0, |m| m.len());
+    memory(
+        format!("reading its {:.0} MB of text", len as f64 / 1e6),
+        len.saturating_mul(crate::limits::OBJ_BYTES_PER_TEXT_BYTE),
+    )?;
+    let text = read_text(path)?;
+    let obj = objparse::parse(&text).map_err(|message| Error::Obj {
+        path: path.to_path_buf(),
+        message,
+    })?;
+    drop(text);
+    let n = obj.triangles.len() as u64;
+    memory(
+        format!("a scene of {n} triangles"),
+        n.saturating_mul(crate::limits::SCENE_PEAK_BYTES_PER_TRIANGLE),
+    )?;
+    Ok(obj)
 }
 
 /// `Ka ×12, map_Ka ×2`: the kinds of statements skipped, with their counts.
