@@ -448,29 +448,9 @@ fn draw_integrate_panel<DB: DrawingBackend>(
             });
         chart.draw_series(pts.iter().map(|&q| Circle::new(q, 3, colour.filled())))?;
     }
-    // the formula last, over the line it predicts
-    if !p.predicted.is_empty() {
-        chart
-            .draw_series(DashedLineSeries::new(
-                p.predicted.iter().map(|q| (q[0], q[1])),
-                6,
-                4,
-                BLACK.stroke_width(1),
-            ))?
-            .label("σ²/N")
-            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(1)));
-    }
-    if !p.jittered.is_empty() {
-        chart
-            .draw_series(DashedLineSeries::new(
-                p.jittered.iter().map(|q| (q[0], q[1])),
-                3,
-                3,
-                BLACK.stroke_width(1),
-            ))?
-            .label("(1/N²) Σ σ_i²")
-            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(1)));
-    }
+    // the formulas last, over the lines they predict
+    draw_formula(&mut chart, &p.predicted, (6, 4), "σ²/N")?;
+    draw_formula(&mut chart, &p.jittered, (3, 3), "(1/N²) Σ σ_i²")?;
     chart
         .configure_series_labels()
         .label_font((FONT, 11))
@@ -478,6 +458,25 @@ fn draw_integrate_panel<DB: DrawingBackend>(
         .border_style(BLACK)
         .position(SeriesLabelPosition::LowerLeft)
         .draw()
+}
+
+/// A formula's curve `pts` (none: nothing drawn) dashed (`dash` on, `gap` off) in black, with
+/// its legend `label`.
+fn draw_formula<DB: DrawingBackend>(
+    chart: &mut ChartContext<'_, DB, Cartesian2d<LogCoord<f64>, LogCoord<f64>>>,
+    pts: &[[f64; 2]],
+    (dash, gap): (i32, i32),
+    label: &str,
+) -> DrawResult<DB> {
+    if pts.is_empty() {
+        return Ok(());
+    }
+    let line = DashedLineSeries::new(pts.iter().map(|q| (q[0], q[1])), dash, gap, BLACK.into());
+    chart
+        .draw_series(line)?
+        .label(label)
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(1)));
+    Ok(())
 }
 
 /// The lecture's Figure 2 (`vrpt integrate --figure`): a 1D integrand with N points from `p`
