@@ -24,6 +24,7 @@ pub mod guide;
 pub mod info;
 pub mod integrate;
 pub mod merge;
+mod outcome;
 pub mod points;
 pub mod render;
 pub mod warptest;
