@@ -463,6 +463,10 @@ impl PreparedRender {
             requested_spp: (r.spp < requested).then_some(requested as u64),
             interrupted: r.interrupted,
             auto: auto.as_ref().map(Choice::record),
+            // the pilots' time too, as a time limit counts it (the summary's rates are the
+            // render's own)
+            render_seconds: (r.stats.elapsed + auto.as_ref().map_or(Duration::ZERO, |c| c.elapsed))
+                .as_secs_f64(),
             ..RenderMetadata::new(&self.scene, &settings, &r.stats)
         };
         if let Some(output) = &self.output {

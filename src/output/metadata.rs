@@ -42,7 +42,8 @@ pub struct RenderMetadata {
     pub reuse: Option<u32>,
     /// How paths ended and split (`--roulette`).
     pub roulette: crate::integrator::rrs::Roulette,
-    /// Wall time of the render (summed over the inputs of a merge).
+    /// Wall time of the render, `--strategy auto`'s pilots included (summed over the inputs of
+    /// a merge).
     pub render_seconds: f64,
     /// Samples dropped because their radiance was not finite.
     pub nonfinite_samples: u64,

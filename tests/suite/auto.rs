@@ -27,7 +27,8 @@ fn render(args: &[&str]) -> RenderOutcome {
 /// spp per pilot the baseline's rare hits of the light are mostly missed, so its pilot reads
 /// only about 4× less efficient (z ≈ 10 with relMSE standard errors of 10% on 48×36 pixels):
 /// the switch needs z > 2, a ratio above 1.3. The image is then `--strategy mis`'s with the
-/// same seed, bit for bit: the pilots' samples are not in it.
+/// same seed, bit for bit: the pilots' samples are not in it; its recorded wall time is the
+/// pilots' and the render's.
 #[test]
 fn auto_chooses_the_efficient_strategy_and_renders_it_as_itself() {
     let size = ["--width", "48", "--height", "36", "--spp", "64"];
@@ -52,6 +53,9 @@ fn auto_chooses_the_efficient_strategy_and_renders_it_as_itself() {
             assert_eq!(auto.meta.strategy, mis.meta.strategy);
             let record = auto.meta.auto.as_deref().unwrap();
             assert!(record.starts_with("chose mis;"), "{record}");
+            // the metadata's wall time holds the pilots' too
+            let total = (auto.stats.elapsed + choice.elapsed).as_secs_f64();
+            assert!((auto.meta.render_seconds - total).abs() < 1e-9);
             assert!(auto.summary.contains("<- chosen"), "{}", auto.summary);
         }
     }
