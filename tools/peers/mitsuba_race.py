@@ -91,6 +91,7 @@ VRPT_STRATEGIES = [
     ("vrpt mis --reuse 2", "mis --reuse 2"),
     ("vrpt mis --reuse 3", "mis --reuse 3"),
     ("vrpt mis --reuse 4", "mis --reuse 4"),
+    ("vrpt auto (mis, mis+reuse4)", "auto"),
     ("vrpt sobol+phong+mis", "sobol+phong+mis"),
     ("vrpt independent+phong+mis", "independent+phong+mis"),
     ("vrpt combined (bsdf only)", "combined"),
