@@ -123,6 +123,12 @@ impl Candidate {
             Some(rest) => (rest, Roulette::Ears),
             None => (s, Roulette::Classic),
         };
+        if roulette == Roulette::Classic && rest.contains(EARS_SUFFIX) {
+            return Err(format!(
+                "'{s}': +ears comes last, and does not combine with +reuseK (--roulette ears \
+                 with --reuse)"
+            ));
+        }
         let Some((strategy, k)) = rest.rsplit_once("+reuse") else {
             let strategy = Strategy::parse(rest)?;
             return Ok(Candidate {
@@ -529,9 +535,11 @@ mod tests {
         assert!(Candidate::parse("mis+reuse9")
             .unwrap_err()
             .contains("+reuseK"));
-        assert!(Candidate::parse("mis+reuse2+ears")
-            .unwrap_err()
-            .contains("does not combine"));
+        for bad in ["mis+reuse2+ears", "mis+ears+reuse2"] {
+            assert!(Candidate::parse(bad)
+                .unwrap_err()
+                .contains("does not combine"));
+        }
         let d = default_candidates();
         assert_eq!((d[0].reuse, d[1].reuse), (1, AUTO_REUSE));
         assert!(d.iter().all(|c| c.roulette == Roulette::Classic));
