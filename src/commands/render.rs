@@ -62,8 +62,9 @@ pub struct RenderRequest {
     #[command(flatten)]
     pub strategy: StrategyArgs,
     /// With --strategy auto: the candidates its pilot chooses from, comma-separated strategies,
-    /// each with +reuseK for path reuse in K×K blocks (`mis+reuse3`); the first is kept unless
-    /// another is more efficient beyond the pilot's noise [default: mis,mis+reuse4]
+    /// each with +reuseK for path reuse in K×K blocks (`mis+reuse3`) or +ears for
+    /// efficiency-aware roulette and splitting (`mis+ears`); the first is kept unless another is
+    /// more efficient beyond the pilot's noise [default: mis,mis+reuse4]
     #[arg(long, value_name = "CANDIDATES", value_parser = Candidates::parse)]
     pub auto_candidates: Option<Candidates>,
     #[command(flatten)]
@@ -332,12 +333,15 @@ impl RenderRequest {
                  (--auto-candidates mis,mis+reuse{k}), not with --reuse {k}"
             )));
         }
-        if self.roulette == Some(crate::integrator::rrs::Roulette::Ears) {
-            return Err(Error::Settings(
+        if let Some(r) = self.roulette {
+            let with = match r {
+                crate::integrator::rrs::Roulette::Ears => "mis,mis+ears",
+                crate::integrator::rrs::Roulette::Classic => "mis,mis+reuse4",
+            };
+            return Err(Error::Settings(format!(
                 "--strategy auto chooses the roulette too: name it among the candidates \
-                 (--auto-candidates mis,mis+ears), not with --roulette ears"
-                    .into(),
-            ));
+                 (--auto-candidates {with}), not with --roulette {r}"
+            )));
         }
         if self.shard.is_some() || self.error.adaptive {
             return Err(Error::Settings(
@@ -369,7 +373,10 @@ impl RenderRequest {
                 Some(c) => c[0].reuse,
                 None => self.reuse.unwrap_or(1),
             },
-            roulette: self.roulette.unwrap_or_default(),
+            roulette: match &auto {
+                Some(c) => c[0].roulette,
+                None => self.roulette.unwrap_or_default(),
+            },
             replicates: (self.error.replicates).unwrap_or(if acting {
                 ACTING_REPLICATES
             } else {

@@ -1,9 +1,9 @@
 //! `--strategy auto`: a render that chooses its own estimator from a pilot.
 //!
 //! A candidate ([`Candidate`]) is a strategy with path reuse in blocks of `K × K` pixels or
-//! without, or with efficiency-aware roulette and splitting (`mis`, `mis+reuse4`, `mis+ears`). Each candidate renders a pilot of the same samples per pixel as
-//! [`PILOT_REPLICATES`] independent replicates, with seeds of its own ([`pilot_seed`]) that no
-//! other render uses. A pilot gives the image's relMSE, estimated from its replicates' spread
+//! without, or with efficiency-aware roulette and splitting (`mis`, `mis+reuse4`, `mis+ears`).
+//! Each candidate renders a pilot of the same samples per pixel as [`PILOT_REPLICATES`]
+//! independent replicates, with seeds of its own ([`pilot_seed`]) that no other render uses. A pilot gives the image's relMSE, estimated from its replicates' spread
 //! (honest for every sampler, [`crate::estimate`]), with a standard error from the spread of the
 //! pixels' terms, and its cost. Its efficiency is `e = 1/(relMSE × cost)`: both factors scale
 //! with the samples (relMSE as 1/spp, cost as spp), so pilots of any size compare. Path reuse
@@ -25,7 +25,7 @@
 //! efficiency exceeds the first candidate's (the default) with `z = ln(e/e₀)/√(s² + s₀²) >`
 //! [`SWITCH_Z`], `s = se(relMSE)/relMSE`; otherwise the first. The pilots' samples are
 //! discarded, and the image is the chosen candidate's render with the render's own seed: the
-//! same image as `--strategy CHOSEN [--reuse K]`, so each choice is unbiased and so is their
+//! same image as `--strategy CHOSEN [--reuse K | --roulette ears]`, so each choice is unbiased and so is their
 //! mixture.
 //!
 //! A pilot sees the budget of a pilot: a guide trained on 1/16 of the samples has learned less
@@ -202,7 +202,7 @@ pub fn default_candidates() -> Vec<Candidate> {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Cost {
     /// Rays traced (camera, bounce, shadow; training included), a reuse connection's shadow
-    /// ray weighed [`CONNECTION_COST`].
+    /// ray weighed [`CONNECTION_COST`], every ray of an EARS candidate [`EARS_RAY_COST`].
     Rays,
     /// Wall seconds.
     Seconds,
@@ -363,7 +363,7 @@ pub fn choose(
 
 impl Choice {
     /// The settings of the render after the pilots: `settings` with the chosen candidate's
-    /// strategy and reuse.
+    /// strategy, reuse and roulette.
     pub fn settings(&self, settings: &RenderSettings) -> RenderSettings {
         self.candidate.settings(settings)
     }

@@ -435,6 +435,7 @@ fn emitters_of(accel: &Accel, shading: &[TriShading], materials: &[Material]) ->
         })
         .collect()
 }
+
 /// A scene's camera: its own (`camera`), else a frame of its bounds `(lo, hi)` seen from +z, or
 /// with `auto_view` a view that sees the fronts of surfaces ([`auto::choose_camera`], with a
 /// warning when that is not the view from +z) and what that view sees.

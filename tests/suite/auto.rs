@@ -163,13 +163,17 @@ fn auto_refuses_what_it_cannot_honour() {
         args.extend_from_slice(extra);
         common::vrpt(&args)
     };
-    let cases: [(&[&str], &str); 9] = [
+    let cases: [(&[&str], &str); 10] = [
         (&["--strategy", "auto", "--sampler", "sobol"], "--sampler"),
         (&["--strategy", "auto", "--shard", "0/2"], "--shard"),
         (&["--strategy", "auto", "--adaptive"], "--adaptive"),
         (&["--auto-candidates", "mis"], "only --strategy auto"),
         (&["--strategy", "auto", "--reuse", "2"], "mis+reuse2"),
         (&["--strategy", "auto", "--roulette", "ears"], "mis+ears"),
+        (
+            &["--strategy", "auto", "--roulette", "classic"],
+            "--roulette classic",
+        ),
         (
             &[
                 "--strategy",
