@@ -29,6 +29,7 @@
 use super::TriShading;
 use crate::accel::{Accel, TraceStack};
 use crate::camera::{Camera, CameraDesc};
+use crate::environment::Environment;
 use crate::lights::{luminance, Emitter, Shape};
 use crate::math::{hash_words, u64_to_unit_f32};
 use glam::{UVec2, Vec2, Vec3};
@@ -243,4 +244,84 @@ pub fn frame_from(lo: Vec3, hi: Vec3, dir: Vec3) -> CameraDesc {
 /// direct brightness below [`DARK`]).
 pub fn too_dark(s: &Survey) -> bool {
     s.direct < DARK
+}
+
+/// A scene's camera: its own (`camera`), else a frame of its bounds `(lo, hi)` seen from +z, or
+/// with `auto_view` a view that sees the fronts of surfaces ([`choose_camera`], with a
+/// warning when that is not the view from +z) and what that view sees.
+pub(super) fn camera_of(
+    camera: Option<CameraDesc>,
+    auto_view: bool,
+    g: &Geometry,
+    (lo, hi): (Vec3, Vec3),
+    warnings: &mut Vec<String>,
+) -> (CameraDesc, Option<Survey>) {
+    match camera {
+        Some(c) => (c, None),
+        None if !auto_view => (frame_bounds(lo, hi), None),
+        None => {
+            let outside = frame_bounds(lo, hi);
+            let (c, s) = choose_camera(g, (lo, hi), outside);
+            if c != outside {
+                let inside = (lo.cmple(c.eye) & c.eye.cmple(hi)).all();
+                warnings.push(format!(
+                    "the view from +z sees mostly the backs of surfaces, or almost nothing: \
+                     the camera is placed {}, at {} looking toward {} (a [camera] in \
+                     scene.toml chooses another)",
+                    if inside { "inside" } else { "outside" },
+                    show(c.eye),
+                    show(c.target)
+                ));
+            }
+            (c, Some(s))
+        }
+    }
+}
+
+/// The environment of a scene without one of its own: none (black) when its emitters light
+/// what the camera sees; the studio (a grey sky and a key light from behind the camera, above
+/// and to its right, so the faces the camera sees are lit and shadows fall away from it) when
+/// it has no emitters or they light almost nothing of what the view `seen` sees, with a warning.
+pub(super) fn environment_of(
+    camera: &CameraDesc,
+    emitters: &[Emitter],
+    seen: Option<&Survey>,
+    warnings: &mut Vec<String>,
+) -> Environment {
+    let key = {
+        let back = (camera.eye - camera.target).normalize_or(Vec3::Z);
+        let right = camera.up.cross(back).normalize_or(Vec3::X);
+        (back + camera.up.normalize_or(Vec3::Y) + 0.5 * right).normalize()
+    };
+    if emitters.is_empty() {
+        warnings.push(
+            "no emitters: lighting with a grey sky and a key light from behind the camera \
+             ([environment] in scene.toml chooses another)"
+                .into(),
+        );
+        Environment::studio(key)
+    } else if seen.is_some_and(too_dark) {
+        let power: f32 = emitters.iter().map(|e| e.power()).sum();
+        warnings.push(format!(
+            "the scene's {} emitting triangles (power {power:.3}) light almost nothing \
+             the camera sees (direct brightness {:.1e}): lighting it also with a \
+             grey sky and a key light from behind the camera ([environment] radiance = \
+             [0, 0, 0] in scene.toml keeps it dark)",
+            emitters.len(),
+            seen.map_or(0.0, |s| s.direct)
+        ));
+        Environment::studio(key)
+    } else {
+        Environment::Constant(Vec3::ZERO)
+    }
+}
+
+/// `(x, y, z)` to three significant digits, for a message.
+fn show(v: Vec3) -> String {
+    format!("({:.3}, {:.3}, {:.3})", v.x, v.y, v.z)
+}
+
+/// A camera looking at the bounding box from +z, far enough back to see all of it at 40°.
+fn frame_bounds(lo: Vec3, hi: Vec3) -> CameraDesc {
+    frame_from(lo, hi, Vec3::Z)
 }

@@ -150,15 +150,16 @@ impl Scene {
             emitters: &emitters,
             epsilon: ray_epsilon,
         };
-        let (camera, seen) = camera_of(
+        let (camera, seen) = auto::camera_of(
             options.camera,
             options.auto_view,
             &geometry,
             (lo, hi),
             &mut warnings,
         );
-        let environment = (options.environment)
-            .unwrap_or_else(|| environment_of(&camera, &emitters, seen.as_ref(), &mut warnings));
+        let environment = (options.environment).unwrap_or_else(|| {
+            auto::environment_of(&camera, &emitters, seen.as_ref(), &mut warnings)
+        });
         let radius = 0.5 * (hi - lo).length();
         let mut hash = content_hash(&mesh, &materials, &camera, &environment);
         if !options.textures.textures.is_empty() {
@@ -434,86 +435,6 @@ fn emitters_of(accel: &Accel, shading: &[TriShading], materials: &[Material]) ->
             Emitter::triangle(prim as u32, accel.vertices(prim as u32), emission)
         })
         .collect()
-}
-
-/// A scene's camera: its own (`camera`), else a frame of its bounds `(lo, hi)` seen from +z, or
-/// with `auto_view` a view that sees the fronts of surfaces ([`auto::choose_camera`], with a
-/// warning when that is not the view from +z) and what that view sees.
-fn camera_of(
-    camera: Option<CameraDesc>,
-    auto_view: bool,
-    g: &auto::Geometry,
-    (lo, hi): (Vec3, Vec3),
-    warnings: &mut Vec<String>,
-) -> (CameraDesc, Option<auto::Survey>) {
-    match camera {
-        Some(c) => (c, None),
-        None if !auto_view => (frame_bounds(lo, hi), None),
-        None => {
-            let outside = frame_bounds(lo, hi);
-            let (c, s) = auto::choose_camera(g, (lo, hi), outside);
-            if c != outside {
-                let inside = (lo.cmple(c.eye) & c.eye.cmple(hi)).all();
-                warnings.push(format!(
-                    "the view from +z sees mostly the backs of surfaces, or almost nothing: \
-                     the camera is placed {}, at {} looking toward {} (a [camera] in \
-                     scene.toml chooses another)",
-                    if inside { "inside" } else { "outside" },
-                    show(c.eye),
-                    show(c.target)
-                ));
-            }
-            (c, Some(s))
-        }
-    }
-}
-
-/// The environment of a scene without one of its own: none (black) when its emitters light
-/// what the camera sees; the studio (a grey sky and a key light from behind the camera, above
-/// and to its right, so the faces the camera sees are lit and shadows fall away from it) when
-/// it has no emitters or they light almost nothing of what the view `seen` sees, with a warning.
-fn environment_of(
-    camera: &CameraDesc,
-    emitters: &[Emitter],
-    seen: Option<&auto::Survey>,
-    warnings: &mut Vec<String>,
-) -> Environment {
-    let key = {
-        let back = (camera.eye - camera.target).normalize_or(Vec3::Z);
-        let right = camera.up.cross(back).normalize_or(Vec3::X);
-        (back + camera.up.normalize_or(Vec3::Y) + 0.5 * right).normalize()
-    };
-    if emitters.is_empty() {
-        warnings.push(
-            "no emitters: lighting with a grey sky and a key light from behind the camera \
-             ([environment] in scene.toml chooses another)"
-                .into(),
-        );
-        Environment::studio(key)
-    } else if seen.is_some_and(auto::too_dark) {
-        let power: f32 = emitters.iter().map(|e| e.power()).sum();
-        warnings.push(format!(
-            "the scene's {} emitting triangles (power {power:.3}) light almost nothing \
-             the camera sees (direct brightness {:.1e}): lighting it also with a \
-             grey sky and a key light from behind the camera ([environment] radiance = \
-             [0, 0, 0] in scene.toml keeps it dark)",
-            emitters.len(),
-            seen.map_or(0.0, |s| s.direct)
-        ));
-        Environment::studio(key)
-    } else {
-        Environment::Constant(Vec3::ZERO)
-    }
-}
-
-/// `(x, y, z)` to three significant digits, for a message.
-fn show(v: Vec3) -> String {
-    format!("({:.3}, {:.3}, {:.3})", v.x, v.y, v.z)
-}
-
-/// A camera looking at the bounding box from +z, far enough back to see all of it at 40°.
-fn frame_bounds(lo: Vec3, hi: Vec3) -> CameraDesc {
-    auto::frame_from(lo, hi, Vec3::Z)
 }
 
 /// Load a scene from an `.obj` (with a `scene.toml` beside it that names it, if any), a
