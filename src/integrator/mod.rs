@@ -39,11 +39,13 @@
 //! every sample — which is what stratification needs.
 //!
 //! Rooms: this module holds the path loop (`Path::trace`: what a vertex adds, the bounce, the
-//! roulette) and the one emission weight; `direct` the light sample of a vertex (next-event
+//! roulette) and the one emission weight; `bounce` the bounce's direction (the BSDF's, or the
+//! guided mixture's); `direct` the light sample of a vertex (next-event
 //! estimation and its MIS weight); `recorder` what a training render keeps of a path
 //! (a `PathRecorder`, the guide's records; an image's paths have none), so guided and
 //! unguided paths are one loop.
 
+mod bounce;
 mod branching;
 mod direct;
 mod recorder;
@@ -56,8 +58,8 @@ use recorder::{Mixture, PathRecorder, Training};
 use reuse::Split;
 
 use crate::accel::TraceStack;
-use crate::bsdf::{Bsdf, BsdfSample, Directions, Specular};
-use crate::guiding::{canonical_to_dir, dir_to_canonical, Guide, GuideAt, Record};
+use crate::bsdf::{Bsdf, Directions, Specular};
+use crate::guiding::{Guide, GuideAt, Record};
 use crate::lights::{LightChoice, LightPoints, LightSampler, LightStrategy};
 use crate::math::Frame;
 use crate::sampler::layout::BounceSample;
@@ -530,57 +532,6 @@ impl<'a> Path<'a> {
             (LightStrategy::Nee, _) => 0.0,
             (LightStrategy::Mis, Some(v)) => mis_weight(v.pdf, p_light(&v)),
         }
-    }
-
-    /// The bounce's direction (world), its sample (local, with the pdf the estimator divides
-    /// by), and with a guide the [`Mixture`] it was drawn from; `None` ends the path (a failed
-    /// sample). With a guide: one-sample MIS of the guide (probability `α`) and the BSDF,
-    /// weighted by the mixture pdf `α·p_guide + (1 − α)·p_bsdf`.
-    #[inline(always)]
-    fn sample_direction(
-        &self,
-        v: &Vertex,
-        bsdf: &Bsdf,
-        g: Option<&GuideAt>,
-        u: &BounceSample,
-    ) -> Option<(Vec3, BsdfSample, Option<Mixture>)> {
-        let directions = self.settings.directions;
-        let Some(g) = g else {
-            let bs = bsdf.sample(v.wo_local, u.lobe, u.direction, directions)?;
-            return Some((v.frame.to_world(bs.wi), bs, None));
-        };
-        let (wi, c, wi_local, f, p_bsdf, p_guide) = if u.guide < g.alpha {
-            // the density comes from the descent that drew the point
-            let (c, p_guide) = g.sample(u.guided_direction);
-            let wi = canonical_to_dir(c);
-            let wi_local = v.frame.to_local(wi);
-            if wi_local.z <= 0.0 {
-                return None; // a guided direction below the surface: a failed sample
-            }
-            let p_bsdf = bsdf.pdf(v.wo_local, wi_local, directions);
-            let f = bsdf.eval(v.wo_local, wi_local);
-            (wi, c, wi_local, f, p_bsdf, p_guide)
-        } else {
-            let bs = bsdf.sample(v.wo_local, u.lobe, u.direction, directions)?;
-            let wi = v.frame.to_world(bs.wi);
-            let c = dir_to_canonical(wi);
-            (wi, c, bs.wi, bs.f, bs.pdf, g.guide_pdf_canonical(c))
-        };
-        let pdf = g.mixture(p_guide, p_bsdf);
-        if !(pdf > 0.0 && pdf.is_finite()) {
-            return None;
-        }
-        let bs = BsdfSample {
-            wi: wi_local,
-            f,
-            pdf,
-        };
-        let mix = Mixture {
-            point: c,
-            p_bsdf,
-            p_guide,
-        };
-        Some((wi, bs, Some(mix)))
     }
 }
 
