@@ -401,6 +401,7 @@ impl RenderRequest {
             adaptive: self.error.adaptive,
             min_allocation_gain: self.error.min_allocation_gain,
             target_error: self.error.target_error,
+            strip: None,
         })
     }
 }

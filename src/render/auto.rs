@@ -3,7 +3,13 @@
 //! A candidate ([`Candidate`]) is a strategy with path reuse in blocks of `K × K` pixels or
 //! without, or with efficiency-aware roulette and splitting (`mis`, `mis+reuse4`, `mis+ears`).
 //! Each candidate renders a pilot of the same samples per pixel as [`PILOT_REPLICATES`]
-//! independent replicates, with seeds of its own ([`pilot_seed`]) that no other render uses. A pilot gives the image's relMSE, estimated from its replicates' spread
+//! independent replicates, with seeds that no other render uses ([`pilot_seed`]) and that every
+//! candidate's pilot shares (common random numbers: path reuse traces the very paths of the
+//! strategy without it, so where the light comes by rare paths, both pilots find the same ones
+//! or miss them together, and their ratio does not hang on which pilot was lucky), on
+//! the same spread quarter (or half) of the image's tiles ([`pilot_strip`]: a pilot costs a
+//! quarter of what the whole image would, and the choice is made from the same tiles for
+//! every candidate). A pilot gives the pilot's relMSE, estimated from its replicates' spread
 //! (honest for every sampler, [`crate::estimate`]), with a standard error from the spread of the
 //! pixels' terms, and its cost. Its efficiency is `e = 1/(relMSE × cost)`: both factors scale
 //! with the samples (relMSE as 1/spp, cost as spp), so pilots of any size compare. Path reuse
@@ -36,20 +42,25 @@
 //! training, shorter than a render's, and is not a default candidate either (where it wins,
 //! `mis+reuse4` wins more: `docs/roulette.md`).
 
-use super::{render_passes, NoProgress, PassPlan, RenderSettings};
+use super::{render_passes, NoProgress, PassPlan, RenderSettings, TileStrip, TILE};
 use crate::error::Result;
 use crate::estimate::rel_mse_standard_error;
 use crate::integrator::reuse::MAX_REUSE;
 use crate::integrator::rrs::Roulette;
 use crate::scene::Scene;
 use crate::strategy::Strategy;
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// Replicates of every pilot.
 pub const PILOT_REPLICATES: u32 = 4;
 
-/// The share of the budget (spp, or time) each candidate's pilot takes: 1/16.
+/// The share of the budget's spp each candidate's pilot takes: 1/16 (on its strip of tiles, so
+/// 1/64 of the render's cost where the strip is a quarter of the image).
 pub const PILOT_SHARE: f64 = 1.0 / 16.0;
+
+/// The fewest whole tiles a pilot's strip holds ([`pilot_strip`]): 12 tiles are 3072 pixels.
+pub const PILOT_TILES: usize = 12;
 
 /// The z above which the most efficient candidate replaces the first: a false switch between
 /// two equally efficient candidates has a one-sided normal probability of 2.3%, and the
@@ -242,13 +253,26 @@ pub struct Choice {
     pub z: f64,
     /// Wall time of all the pilots.
     pub elapsed: Duration,
+    /// The tiles the pilots rendered, and the image's (partial ones included).
+    pub tiles: (u32, u32),
 }
 
-/// The seed of candidate `k`'s pilot in a render of seed `seed`: a hash no render's own seed
-/// and no replicate seed of one meets but by a 64-bit collision.
-pub fn pilot_seed(seed: u64, k: usize) -> u64 {
+/// The seed of every candidate's pilot in a render of seed `seed` (common random numbers: see
+/// the module doc): a hash no render's own seed and no replicate seed of one meets but by a
+/// 64-bit collision.
+pub fn pilot_seed(seed: u64) -> u64 {
     // "pilot" in ASCII, as a domain separator
-    crate::math::hash_words(&[0x70_69_6c_6f_74, seed, k as u64])
+    crate::math::hash_words(&[0x70_69_6c_6f_74, seed, 0])
+}
+
+/// The tiles the pilots of a `width × height` render take: a quarter of the whole tiles
+/// ([`TileStrip::every`], stride 4) where that is at least [`PILOT_TILES`], else half where
+/// that is; `None` (the whole image) for a smaller image.
+pub fn pilot_strip(width: u32, height: u32) -> Option<TileStrip> {
+    [4, 2]
+        .into_iter()
+        .map(|stride| TileStrip::every(width, height, stride))
+        .find(|s| s.origins.len() >= PILOT_TILES)
 }
 
 /// The pilot's samples per pixel for a render of `spp`: [`PILOT_SHARE`] of them, a multiple of
@@ -293,16 +317,27 @@ pub fn choose(
         Some(_) => Cost::Seconds,
         None => Cost::Rays,
     };
+    let strip = pilot_strip(settings.width, settings.height).map(Arc::new);
+    let (width, height) = strip
+        .as_ref()
+        .map_or((settings.width, settings.height), |s| s.size());
+    let image_tiles = settings.width.div_ceil(TILE) * settings.height.div_ceil(TILE);
+    let tiles = strip
+        .as_ref()
+        .map_or(image_tiles, |s| s.origins.len() as u32);
     let pilot = |k: usize, spp: u32| -> Result<PilotRow> {
         let s = RenderSettings {
-            seed: pilot_seed(settings.seed, k),
+            seed: pilot_seed(settings.seed),
             first_sample: 0,
             spp,
             replicates: PILOT_REPLICATES,
+            width,
+            height,
             ..candidates[k].settings(settings)
         };
         let p = PassPlan {
             stop: plan.stop.clone(),
+            strip: strip.clone(),
             ..PassPlan::default()
         };
         let r = render_passes(scene, &s, &p, &NoProgress)?;
@@ -336,11 +371,14 @@ pub fn choose(
     let spp = match plan.time_limit {
         None => pilot_spp(settings.spp),
         Some(limit) => {
-            // the first candidate's speed, from a pilot of one sample per replicate
+            // the first candidate's speed, from a pilot of one sample per replicate, and the
+            // spp the image would take at it in the time limit
             let probe = pilot(0, PILOT_REPLICATES)?;
-            let per_spp = probe.seconds / probe.spp as f64;
-            let fits = limit.as_secs_f64() * PILOT_SHARE / per_spp.max(1e-12);
-            let spp = pilot_spp(((fits / PILOT_SHARE) as u32).min(settings.spp));
+            let pixels = |w: u32, h: u32| w as f64 * h as f64;
+            let image = pixels(settings.width, settings.height) / pixels(width, height);
+            let per_spp = probe.seconds / probe.spp as f64 * image;
+            let fits = limit.as_secs_f64() / per_spp.max(1e-12);
+            let spp = pilot_spp((fits as u32).min(settings.spp));
             if spp == probe.spp {
                 rows.push(probe);
             }
@@ -358,6 +396,7 @@ pub fn choose(
         cost,
         z,
         elapsed: start.elapsed(),
+        tiles: (tiles, image_tiles),
     })
 }
 
@@ -384,9 +423,11 @@ impl Choice {
             .unwrap_or(8)
             .max(8);
         let mut s = format!(
-            "auto: pilots of {} spp ({} replicates) in {:.2} s\n  {:w$}  {:>10}  {:>9}  {:>9}  {:>10}\n",
+            "auto: pilots of {} spp ({} replicates) on {} of {} tiles in {:.2} s\n  {:w$}  {:>10}  {:>9}  {:>9}  {:>10}\n",
             self.rows.first().map_or(0, |r| r.spp),
             PILOT_REPLICATES,
+            self.tiles.0,
+            self.tiles.1,
             self.elapsed.as_secs_f64(),
             "strategy",
             "relMSE",
@@ -437,11 +478,13 @@ impl Choice {
             .map(|r| format!("{} {:.3}", r.candidate, r.efficiency / e0))
             .collect();
         format!(
-            "chose {}; efficiency {}; z {:.2}; pilots {} spp, cost {}",
+            "chose {}; efficiency {}; z {:.2}; pilots {} spp on {} of {} tiles, cost {}",
             self.candidate,
             rows.join(", "),
             self.z,
             self.rows.first().map_or(0, |r| r.spp),
+            self.tiles.0,
+            self.tiles.1,
             match self.cost {
                 Cost::Rays => "rays",
                 Cost::Seconds => "seconds",
@@ -551,7 +594,7 @@ mod tests {
         assert_eq!(pilot_spp(64), 4);
         assert_eq!(pilot_spp(256), 16);
         assert_eq!(pilot_spp(1000), 60);
-        assert_ne!(pilot_seed(0, 0), pilot_seed(0, 1));
-        assert_ne!(pilot_seed(0, 0), pilot_seed(1, 0));
+        assert_ne!(pilot_seed(0), pilot_seed(1));
+        assert_ne!(pilot_seed(0), 0);
     }
 }

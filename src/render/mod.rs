@@ -10,7 +10,8 @@
 //! [`render_passes_with`]), the sampler dispatch and the job every pass shares; `settings` the
 //! settings and their checks, `passes` the uniform passes and the stop condition, `adaptive` the
 //! adaptive rounds, `training` the guide's training, `rrs_training` EARS's, `tile` the tile
-//! kernel, `stats` what a render counts and its text, `auto` the pilots of `--strategy auto`.
+//! kernel, `stats` what a render counts and its text, `strip` a render of some of the image's
+//! tiles, `auto` the pilots of `--strategy auto`.
 
 #![warn(missing_docs)]
 
@@ -39,11 +40,13 @@ mod passes;
 mod rrs_training;
 mod settings;
 mod stats;
+mod strip;
 mod tile;
 mod training;
 use settings::camera_for;
 pub use settings::{RenderSettings, ACTING_REPLICATES, MAX_REUSE};
 pub use stats::{GuideStats, RenderStats, RrsStats};
+pub use strip::TileStrip;
 use tile::{tile_count, Alloc, Batch, BatchOutput, Kernel, Samples};
 pub use training::learn_guide;
 use training::Trainer;
@@ -203,6 +206,10 @@ pub struct PassPlan {
     /// Stop after the first pass (a whole round of the replicates) after which the image's
     /// estimated relMSE is at most this.
     pub target_error: Option<f64>,
+    /// Render only some whole tiles of the image, side by side ([`TileStrip`]): the settings'
+    /// width and height are then the strip's, the camera the image's. `--strategy auto`'s
+    /// pilots render one.
+    pub strip: Option<Arc<TileStrip>>,
 }
 
 /// Wall time the samples that a stopped render takes after the stop aim at (see
@@ -335,7 +342,18 @@ pub fn render_passes_with<F: SamplerFactory>(
     factory: &F,
     progress: &dyn Progress,
 ) -> Result<Rendered> {
-    let camera = camera_for(scene, settings)?;
+    let camera = match &plan.strip {
+        Some(strip) => {
+            strip.check(settings.width, settings.height)?;
+            let image = RenderSettings {
+                width: strip.image.x,
+                height: strip.image.y,
+                ..settings.clone()
+            };
+            camera_for(scene, &image)?
+        }
+        None => camera_for(scene, settings)?,
+    };
     check_plan(settings, plan)?;
     let start = Instant::now();
     with_threads(settings.threads, || {
@@ -366,7 +384,8 @@ pub fn render_passes_with<F: SamplerFactory>(
         let training = start.elapsed();
         let job = Job {
             kernel: Kernel::new(scene, &camera, settings, factory, guide, progress)
-                .with_rrs(rrs.as_ref().map(|r| r.kernel())),
+                .with_rrs(rrs.as_ref().map(|r| r.kernel()))
+                .with_strip(plan.strip.as_deref()),
             settings,
             plan,
             start,
@@ -385,7 +404,8 @@ pub fn render_passes_with<F: SamplerFactory>(
             r.final_time = stats.elapsed - training;
         }
         r.stats = stats;
-        r.ears_map = (rrs.as_ref())
+        // (a strip's pixels are not the image's: no map of it)
+        r.ears_map = (rrs.as_ref().filter(|_| plan.strip.is_none()))
             .map(|s| s.first_vertex_map(scene, &camera, (settings.width, settings.height)));
         Ok(r)
     })?

@@ -175,7 +175,8 @@ impl<F: SamplerFactory> Trainer<'_, F> {
                 &NoProgress,
             )
             .with_seed(seed)
-            .with_rrs(Some(rrs));
+            .with_rrs(Some(rrs))
+            .with_strip(self.plan.strip.as_deref());
             let batch = Batch {
                 samples: Samples::Pass { set, range: 0..spp },
                 tiles: start..(start + per_chunk).min(tiles),

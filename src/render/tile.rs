@@ -91,6 +91,8 @@ pub(super) struct Kernel<'a, F: SamplerFactory> {
     reuse: u32,
     /// The learned roulette and splitting of `--roulette ears` (`None`: classic roulette).
     rrs: Option<RrsKernel<'a>>,
+    /// The image's tiles the render's pixels show (`None`: the render is the image).
+    strip: Option<&'a TileStrip>,
 }
 
 /// What the tile kernel gives `--roulette ears`'s paths: the learned factors, each pixel's
@@ -135,7 +137,13 @@ impl<'a, F: SamplerFactory> Kernel<'a, F> {
             seed: settings.seed,
             reuse: settings.reuse,
             rrs: None,
+            strip: None,
         }
+    }
+
+    /// The same kernel rendering the tiles of `strip` (if any) side by side.
+    pub(super) fn with_strip(self, strip: Option<&'a TileStrip>) -> Self {
+        Kernel { strip, ..self }
     }
 
     /// The same kernel with `--roulette ears`'s learned factors.
@@ -291,6 +299,11 @@ impl<'a, F: SamplerFactory> Kernel<'a, F> {
         }
         let mut splits = vec![Split::new(); n];
         let (mut nonfinite, mut samples) = (0u64, 0u64);
+        // the image's index of the tile (a strip's tile reuses as the image's tile does)
+        let image_t = self.strip.map_or(t, |s| {
+            let o = s.origins[t as usize];
+            o.y / TILE * s.image.x.div_ceil(TILE) + o.x / TILE
+        });
         let steps = count.iter().copied().max().unwrap_or(0);
         for step in 0..steps {
             if batch.stop.is_some_and(|f| f.load(Ordering::Relaxed)) {
@@ -320,7 +333,7 @@ impl<'a, F: SamplerFactory> Kernel<'a, F> {
             let index = first[0] + step;
             let live = |q: usize| step < count[q];
             let (n_new, bad) =
-                self.combine_blocks((t, k, index), &splits, live, &mut tile, &mut added);
+                self.combine_blocks((image_t, k, index), &splits, live, &mut tile, &mut added);
             (samples, nonfinite) = (samples + n_new, nonfinite + bad);
         }
         if !tile.cut {
@@ -346,6 +359,7 @@ impl<'a, F: SamplerFactory> Kernel<'a, F> {
         rays: &mut RayCounts,
     ) -> (Vec3, Vec3) {
         rays.start_path(self.integrator.time_traces);
+        let pixel = self.strip.map_or(pixel, |s| s.image_pixel(pixel));
         // below SAMPLE_INDICES (checked by camera_for): a u32
         sampler.start_pixel_sample(pixel, index as u32);
         let ray = self

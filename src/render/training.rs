@@ -86,7 +86,8 @@ impl<F: SamplerFactory> Trainer<'_, F> {
                 guide,
                 &NoProgress,
             )
-            .with_seed(seed);
+            .with_seed(seed)
+            .with_strip(self.plan.strip.as_deref());
             let results: Vec<BatchOutput> = pieces
                 .into_par_iter()
                 .map(|range| {

@@ -124,27 +124,38 @@ fn auto_chooses_ears_and_renders_it_as_itself() {
 
 /// With rays as the cost the pilots are deterministic: the same choice, the same pilot numbers
 /// and the same image on 1 and 2 threads (the default candidates, path reuse among them, whose
-/// connections are counted in the cost).
+/// connections are counted in the cost); on a small image whose pilots render it whole, and on
+/// one whose pilots render a quarter of its tiles (128×96: 12 of 48).
 #[test]
 fn auto_does_not_depend_on_the_thread_count() {
-    let args = [
-        "--width",
-        "32",
-        "--height",
-        "24",
-        "--spp",
-        "32",
-        "--strategy",
-        "auto",
-    ];
-    let one = render(&[&args[..], &["--threads", "1"]].concat());
-    let two = render(&[&args[..], &["--threads", "2"]].concat());
-    let (a, b) = (one.auto.unwrap(), two.auto.unwrap());
-    assert_eq!(a.candidate, b.candidate);
-    for (x, y) in a.rows.iter().zip(&b.rows) {
-        assert_eq!((x.rel_mse, x.cost), (y.rel_mse, y.cost));
+    for (size, tiles) in [
+        (["32", "24", "32"], (4, 4)),
+        (["128", "96", "16"], (12, 48)),
+    ] {
+        let [w, h, spp] = size;
+        let args = [
+            "--width",
+            w,
+            "--height",
+            h,
+            "--spp",
+            spp,
+            "--strategy",
+            "auto",
+        ];
+        let one = render(&[&args[..], &["--threads", "1"]].concat());
+        let two = render(&[&args[..], &["--threads", "2"]].concat());
+        let (a, b) = (one.auto.unwrap(), two.auto.unwrap());
+        assert_eq!(a.tiles, tiles);
+        assert!(a
+            .record()
+            .contains(&format!("on {} of {} tiles", tiles.0, tiles.1)));
+        assert_eq!(a.candidate, b.candidate);
+        for (x, y) in a.rows.iter().zip(&b.rows) {
+            assert_eq!((x.rel_mse, x.cost), (y.rel_mse, y.cost));
+        }
+        assert_eq!(one.film.mean_image(), two.film.mean_image());
     }
-    assert_eq!(one.film.mean_image(), two.film.mean_image());
 }
 
 #[test]
