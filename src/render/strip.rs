@@ -56,6 +56,13 @@ impl TileStrip {
         self.origins[(p.x / TILE) as usize] + UVec2::new(p.x % TILE, p.y)
     }
 
+    /// The image's row-major index of strip tile `t` (a strip's tile reuses its paths in the
+    /// blocks the image's tile does: their grid's shift hashes the tile's index).
+    pub fn image_tile(&self, t: u32) -> u32 {
+        let o = self.origins[t as usize];
+        o.y / TILE * self.image.x.div_ceil(TILE) + o.x / TILE
+    }
+
     /// Whether a render of `width × height` can render this strip: its size, and tiles that
     /// lie whole within the image.
     pub fn check(&self, width: u32, height: u32) -> Result<()> {

@@ -299,11 +299,7 @@ impl<'a, F: SamplerFactory> Kernel<'a, F> {
         }
         let mut splits = vec![Split::new(); n];
         let (mut nonfinite, mut samples) = (0u64, 0u64);
-        // the image's index of the tile (a strip's tile reuses as the image's tile does)
-        let image_t = self.strip.map_or(t, |s| {
-            let o = s.origins[t as usize];
-            o.y / TILE * s.image.x.div_ceil(TILE) + o.x / TILE
-        });
+        let image_t = self.strip.map_or(t, |s| s.image_tile(t));
         let steps = count.iter().copied().max().unwrap_or(0);
         for step in 0..steps {
             if batch.stop.is_some_and(|f| f.load(Ordering::Relaxed)) {
