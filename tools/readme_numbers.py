@@ -376,8 +376,10 @@ def equal_time_pairs(scene, w, h, seconds, configs, pairs=((1, 2), (3, 4)), log=
     (`E[(a − b)²] = 2 Var` for two independent unbiased renders). A reference's own noise would
     be a floor under the error that hides the gain once the renders near its spp (adaptive
     renders of the glossy plates at 60 s, or of lit-checker, whose 30 s renders exceed an
-    8192-spp reference); the pair has none. The denominator `b² + 0.01` uses one noisy render,
-    the same way for both configs."""
+    8192-spp reference); the pair has none. The relMSE's denominator is the pair's mean,
+    `((a + b)/2)² + 0.01` (`vrpt diff`'s "relMSE of one (pair)"): with one render's `b² + 0.01`
+    (before 2026-11-27) a heavy-tailed pixel that one render had low carried the table (two
+    light-edge pixels 82–99% of textured's relMSE)."""
     got = {label: ([], [], "") for label, _ in configs}
     for pair in pairs:
         for label, flags in configs:
@@ -393,7 +395,7 @@ def equal_time_pairs(scene, w, h, seconds, configs, pairs=((1, 2), (3, 4)), log=
                 if log is not None:
                     log.append((label, r.stderr))
             d = vrpt("diff", imgs[0], imgs[1]).stdout
-            rel = float(re.search(r"^relMSE \(eps 0.01\)\s+(\S+)", d, re.M).group(1)) / 2
+            rel = float(re.search(r"^relMSE of one \(pair\)\s+(\S+)", d, re.M).group(1))
             m, n, _ = got[label]
             got[label] = (m + [rel], n + spps, err)
     return {l: (statistics.mean(m), statistics.median(n), e) for l, (m, n, e) in got.items()}

@@ -5,7 +5,8 @@
 use super::{RegionArgs, Written};
 use crate::analysis::maps::write_error_map;
 use crate::analysis::metrics::{
-    image_bias, mean_relative_variance, mean_variance, metrics, region_metrics, ImageBias, Metrics,
+    image_bias, mean_relative_variance, mean_variance, metrics, pair_rel_mse, region_metrics,
+    ImageBias, Metrics,
 };
 use crate::analysis::report::{number, Column, Report, Table};
 use crate::error::{Error, Result};
@@ -35,6 +36,9 @@ pub struct DiffRequest {
 #[derive(Clone, Debug)]
 pub struct DiffOutcome {
     pub metrics: Metrics,
+    /// The relMSE of one render, were the two images independent renders of one estimator
+    /// ([`pair_rel_mse`]).
+    pub pair_rel_mse: f64,
     /// The largest `|a − b| / max(|a|, |b|)` over pixels and channels.
     pub max_relative_difference: f32,
     /// The image's mean variance of the mean, when it records one.
@@ -104,6 +108,7 @@ pub fn run(req: &DiffRequest) -> Result<DiffOutcome> {
     let regions = req.regions.resolve(a.width, a.height)?;
     let mut out = DiffOutcome {
         metrics: metrics(&a.pixels, &r.pixels),
+        pair_rel_mse: pair_rel_mse(&a.pixels, &r.pixels),
         max_relative_difference: max_relative_difference(&a.pixels, &r.pixels),
         variance: a.variance.as_deref().map(mean_variance),
         bias: a
@@ -159,6 +164,11 @@ impl DiffOutcome {
         t += &format!("RMSE               {:.6e}\n", m.rmse);
         t += &format!("MAE                {:.6e}\n", m.mae);
         t += &format!("mean signed error  {:+.6e}\n", m.mean_signed_error);
+        t += &format!(
+            "relMSE of one (pair) {:.6e} (were the two independent renders of one estimator: \
+             mean (a−b)²/(2(m²+0.01)), m = (a+b)/2)\n",
+            self.pair_rel_mse
+        );
         t += &format!(
             "max relative difference {:.3e}\n",
             self.max_relative_difference
