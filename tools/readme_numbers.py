@@ -369,18 +369,29 @@ def equal_time(scene, w, h, seconds, ref, configs, seeds=(1, 2, 3), metric="MSE"
     return {l: (statistics.mean(m), statistics.median(n), e) for l, (m, n, e) in got.items()}
 
 
+def pair_denominator(scene, w, h, seconds):
+    """The image whose pixels are the relMSE's `r` for every config's seed pairs of `scene`
+    (`vrpt diff --pair-denominator`): a render of the default strategy for twice the configs'
+    time with a seed none of them uses, so it is independent of all of them and the same for
+    all."""
+    size = ["--width", w, "--height", h] if w else []
+    return cached_render(f"denominator-{scene}-{w}x{h}-{seconds}", f"scenes/{scene}", *size, "--spp", 1 << 20,
+                         "--time-limit", 2 * seconds, "--seed", 7777)
+
+
 def equal_time_pairs(scene, w, h, seconds, configs, pairs=((1, 2), (3, 4)), log=None):
-    """{label: (relMSE, final spp, last stderr)} measured without a reference: each config
-    rendered with `--time-limit` for two seeds of each pair (configs interleaved), and the
-    relMSE of one render estimated as half the relMSE of one against the other
-    (`E[(a − b)²] = 2 Var` for two independent unbiased renders). A reference's own noise would
-    be a floor under the error that hides the gain once the renders near its spp (adaptive
-    renders of the glossy plates at 60 s, or of lit-checker, whose 30 s renders exceed an
-    8192-spp reference); the pair has none. The relMSE's denominator is the pair's mean,
-    `((a + b)/2)² + 0.01` (`vrpt diff`'s "relMSE of one (pair)"): with one render's `b² + 0.01`
-    (before 2026-11-27) a heavy-tailed pixel that one render had low carried the table (two
-    light-edge pixels 82–99% of textured's relMSE)."""
+    """{label: (relMSE, final spp, last stderr)} measured without a converged reference: each
+    config rendered with `--time-limit` for two seeds of each pair (configs interleaved), and the
+    relMSE of one render estimated from the pair, `mean((a − b)²/(2(c² + 0.01)))`
+    (`E[(a − b)²] = 2 Var` for two independent unbiased renders), `c` from
+    [pair_denominator]: one image for every config, so all weigh the pixels alike. A reference's
+    own noise would be a floor under the error that hides the gain once the renders near its spp
+    (adaptive renders of the glossy plates at 60 s, or of lit-checker, whose 30 s renders exceed
+    an 8192-spp reference); the pair has none. Before 2026-11-27 the denominator was one render
+    of the pair, `b² + 0.01`, which divides by whichever render was low: on textured two
+    light-edge pixels carried 82–99% of the relMSE that way."""
     got = {label: ([], [], "") for label, _ in configs}
+    denominator = pair_denominator(scene, w, h, seconds)
     for pair in pairs:
         for label, flags in configs:
             imgs, spps, err = [], [], ""
@@ -394,7 +405,7 @@ def equal_time_pairs(scene, w, h, seconds, configs, pairs=((1, 2), (3, 4)), log=
                 err = r.stderr
                 if log is not None:
                     log.append((label, r.stderr))
-            d = vrpt("diff", imgs[0], imgs[1]).stdout
+            d = vrpt("diff", imgs[0], imgs[1], "--pair-denominator", denominator).stdout
             rel = float(re.search(r"^relMSE of one \(pair\)\s+(\S+)", d, re.M).group(1))
             m, n, _ = got[label]
             got[label] = (m + [rel], n + spps, err)
@@ -500,8 +511,9 @@ def auto():
     seed pairs."""
     print("`vrpt render scenes/SCENE --spp 1048576 --time-limit 10 --seed S` with `--strategy mis`, "
           "`--strategy mis --reuse 4`, `--directions guided` or `--strategy auto` (its default candidates "
-          "mis and mis+reuse4), seed pairs (1, 2) and (3, 4), configs interleaved; relMSE of one render = "
-          "half the relMSE of one against the other; ratio above 1 means auto wins:\n")
+          "mis and mis+reuse4), seed pairs (1, 2) and (3, 4), configs interleaved; relMSE of one render from "
+          "its pair, `mean((a − b)²/(2(c² + 0.01)))`, c one more render shared by every config "
+          "(`vrpt diff --pair-denominator`); ratio above 1 means auto wins:\n")
     configs = [("mis", ["--strategy", "mis"]), ("reuse", ["--strategy", "mis", "--reuse", 4]),
                ("guided", ["--directions", "guided"]), ("auto", ["--strategy", "auto"])]
     rows, vs_mis, vs_best = [], [], []
@@ -529,9 +541,10 @@ def adaptive():
     """Adaptive sampling against uniform at equal time as a user renders (`--time-limit`), relMSE
     from pairs of independent renders, and `--target-error` with and without `--adaptive`."""
     print("`vrpt render SCENE --time-limit T --seed S [--adaptive]` (each scene at its own size) for seeds 1–4, uniform and "
-          "adaptive interleaved; a render's relMSE (eps 0.01) is half the relMSE of seed 1 against seed 2 "
+          "adaptive interleaved; a render's relMSE (eps 0.01) is estimated from seed 1 against seed 2 "
           "(and 3 against 4): two independent unbiased renders differ by twice the variance of one, so no "
-          "reference's noise sits under the error; ratio = uniform relMSE / adaptive relMSE; the gains at "
+          "reference's noise sits under the error (`vrpt diff --pair-denominator`, the r² from one more render "
+          "shared by both configs); ratio = uniform relMSE / adaptive relMSE; the gains at "
           "equal spp are what the adaptive render prints (the ideal `mean(e²)/mean(e)²`, its schedule's bound, "
           "and the cross-validated gain of a round allocated from estimates as noisy as its own), or the "
           "cross-validated gain after the first round that made it finish uniformly:\n")

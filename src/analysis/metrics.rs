@@ -12,7 +12,7 @@
 //! - per-pixel bias z-scores of a mean image with known variance against a reference with known
 //!   variance: `z = (m − r)/√(v_m + v_r)`;
 //! - the relMSE of one render estimated from a pair of independent renders `a`, `b` of the same
-//!   estimator, without a reference ([`pair_rel_mse`]).
+//!   estimator, without a converged reference ([`pair_rel_mse`]).
 
 use crate::stats::student_t_two_sided_p;
 use glam::Vec3;
@@ -65,26 +65,27 @@ pub fn metrics(image: &[Vec3], reference: &[Vec3]) -> Metrics {
 }
 
 /// The relMSE of one render estimated from two independent unbiased renders `a` and `b` of
-/// the same estimator: `mean((a − b)²/(2·(m² + ε)))` with `m = (a + b)/2`, over pixels and
-/// channels.
+/// the same estimator, the relMSE's `r²` taken from `c`, an estimate of the true image
+/// independent of both: `mean((a − b)²/(2·(c² + ε)))` over pixels and channels.
 ///
-/// Per pixel of value `r` and variance `v` (of one render): `E[(a − b)²] = 2v`, so the numerator
-/// over 2 estimates the `v` of the relMSE's term `v/(r² + ε)`. The denominator takes the pair's
-/// mean for `r`: `E[m²] = r² + v/2`, a relative bias of the term of `v/(2(r² + ε))`, second order
-/// in the render's relative error, and each term is at most 2 for non-negative pixels
-/// (`(a − b)² ≤ (a + b)²`). `b² + ε` in its place (the relMSE of `a` against `b`, halved) divides
-/// by whichever render was low: where a pixel is heavy-tailed, one render's value far below `r`
-/// makes its term up to `r²/ε` times too large. On the textured scene at 2048 spp two pixels on
-/// the light's edge (the light seen by a sliver of them, values 0.28–2.4) carried 82–99% of that
-/// relMSE; one term read 39, the same pixel 2.3 here.
-pub fn pair_rel_mse(a: &[Vec3], b: &[Vec3]) -> f64 {
+/// Per pixel of value `r` and variance `v` (of one render), `E[(a − b)²] = 2v`, so the numerator
+/// over 2 estimates the `v` of the relMSE's term `v/(r² + ε)`. Its denominator needs `r`, which
+/// neither render gives without bias: `b² + ε` (the relMSE of `a` against `b`, halved) divides by
+/// whichever render was low, up to `r²/ε` times too much where a pixel is heavy-tailed (on the
+/// textured scene at 2048 spp two pixels on the light's edge, values 0.28–2.4 from render to
+/// render, carried 82–99% of it, one term 39), and the pair's mean `(a + b)/2` is large exactly
+/// when a rare high sample made `(a − b)²` large, so such pixels count almost nothing. With `c`
+/// independent of the pair the expectation is `v·E[1/(c² + ε)]`: the relMSE weighed by `c`'s
+/// denominators. Estimators compared with the same `c` weigh every pixel alike whatever its
+/// noise in `c`, which is what a comparison needs.
+pub fn pair_rel_mse(a: &[Vec3], b: &[Vec3], c: &[Vec3]) -> f64 {
     check_sizes(a, b);
+    check_sizes(a, c);
     let mut rel = 0.0f64;
-    for (x, y) in a.iter().zip(b) {
-        for c in 0..3 {
-            let (x, y) = (x[c] as f64, y[c] as f64);
-            let m = 0.5 * (x + y);
-            rel += (x - y) * (x - y) / (2.0 * (m * m + REL_EPSILON));
+    for ((x, y), r) in a.iter().zip(b).zip(c) {
+        for k in 0..3 {
+            let (d, r) = ((x[k] - y[k]) as f64, r[k] as f64);
+            rel += d * d / (2.0 * (r * r + REL_EPSILON));
         }
     }
     rel / (a.len() * 3) as f64
@@ -377,15 +378,17 @@ mod tests {
         assert!((map[1] - 9.0 / 16.01 / 3.0).abs() < 1e-12);
     }
 
-    /// The pair estimate against the relMSE its renders have by construction. Light tails:
-    /// every value `1 + σ·g`, g normal (Box–Muller on hashed uniforms), σ = 0.05: relMSE
-    /// `σ²/1.01`; the estimate's terms are `σ²χ²₁`-like, relative sd √2 each, so over 3·10⁴
-    /// values the mean's relative sd is 0.8% and the denominator's bias `σ²/2` 0.12%: 4% is
-    /// five sd. Heavy tails: each render's value 0 or 2 with probability ½ (mean 1, variance 1):
-    /// relMSE `1/1.01`; the pair's terms are `4/(2·1.01)` exactly when the two differ (m = 1)
-    /// and 0 otherwise, so the estimate is `1.98·f`, f the share of differing values, sd
-    /// `1.98·√(¼/3·10⁴)` = 0.6% of it: 4% again. The same pairs judged with `b² + ε` as the
-    /// denominator (halved) read about 50× too high: 4/0.01/2 where `b` is 0.
+    /// The pair estimate against the relMSE its renders have by construction, `c` the true
+    /// image. Light tails: every value `1 + σ·g`, g normal (Box–Muller on hashed uniforms),
+    /// σ = 0.05: relMSE `σ²/1.01`; the terms are `σ²χ²₁/1.01`, relative sd √2 each, so over
+    /// 3·10⁴ values the mean's relative sd is 0.8%: 4% is five sd. Rare events: a value 0.1,
+    /// or 10 with probability 1% (mean 0.199, variance 0.9703, relMSE `0.9703/(0.199² + 0.01)`
+    /// = 19.5); a term is `(a − b)²/(2·0.0496)`, 0 when both are 0.1, about 988 when one of
+    /// them is 10 (probability 1.98%), so its relative sd is `√(1/0.0198)` ≈ 7.1 and the mean's
+    /// over 3·10⁴ values 4.1%: 20% is five sd. There `b` as the reference (halved) reads
+    /// `0.99·0.98/(2·0.02)` = 24.3, 1.25× too high (`b² + ε` is 0.02 unless b is the rare 10;
+    /// checked above 1.1×, three sd), and the pair's mean as the denominator about 400× too
+    /// low (`(a − b)²/(2(m² + ε))` ≈ 1.9 when the event happens).
     #[test]
     fn pair_rel_mse_estimates_one_renders_relmse() {
         let n = 10_000;
@@ -406,21 +409,25 @@ mod tests {
         let light = |k: u64| 1.0 + sigma * normal(k);
         let (a, b) = (render(1, &light), render(2, &light));
         let want = sigma * sigma / (1.0 + REL_EPSILON);
-        let got = pair_rel_mse(&a, &b);
+        let got = pair_rel_mse(&a, &b, &vec![Vec3::ONE; n]);
         assert!(
             (got / want - 1.0).abs() < 0.04,
             "light tails: {got} against {want}"
         );
-        let heavy = |k: u64| if u(k) < 0.5 { 0.0 } else { 2.0 };
-        let (a, b) = (render(3, &heavy), render(4, &heavy));
-        let want = 1.0 / (1.0 + REL_EPSILON);
-        let got = pair_rel_mse(&a, &b);
+        let rare = |k: u64| if u(k) < 0.01 { 10.0 } else { 0.1 };
+        let (a, b) = (render(3, &rare), render(4, &rare));
+        let (mean, var) = (0.199f64, 0.01 * 100.0 + 0.99 * 0.01 - 0.199 * 0.199);
+        let want = var / (mean * mean + REL_EPSILON);
+        let got = pair_rel_mse(&a, &b, &vec![Vec3::splat(mean as f32); n]);
         assert!(
-            (got / want - 1.0).abs() < 0.04,
-            "heavy tails: {got} against {want}"
+            (got / want - 1.0).abs() < 0.2,
+            "rare events: {got} against {want}"
         );
         let against_b = metrics(&a, &b).rel_mse / 2.0;
-        assert!(against_b > 30.0 * want, "b as the reference: {against_b}");
+        assert!(against_b > 1.1 * want, "b as the reference: {against_b}");
+        let means: Vec<Vec3> = a.iter().zip(&b).map(|(x, y)| (*x + *y) / 2.0).collect();
+        let own_mean = pair_rel_mse(&a, &b, &means);
+        assert!(own_mean < want / 100.0, "the pair's mean as r: {own_mean}");
     }
 
     #[test]

@@ -28,6 +28,11 @@ pub struct DiffRequest {
     /// Write a self-contained HTML report: both images (HDR), error views, metrics.
     #[arg(long, value_name = "HTML")]
     pub report: Option<PathBuf>,
+    /// IMAGE and REFERENCE are two independent renders of one estimator: print the relMSE of one
+    /// of them, mean (a−b)²/(2(c²+0.01)), with c this image (another render, independent of
+    /// both; give every estimator compared the same one).
+    #[arg(long, value_name = "EXR")]
+    pub pair_denominator: Option<PathBuf>,
     #[command(flatten)]
     pub regions: RegionArgs,
 }
@@ -36,9 +41,8 @@ pub struct DiffRequest {
 #[derive(Clone, Debug)]
 pub struct DiffOutcome {
     pub metrics: Metrics,
-    /// The relMSE of one render, were the two images independent renders of one estimator
-    /// ([`pair_rel_mse`]).
-    pub pair_rel_mse: f64,
+    /// With `--pair-denominator`: the relMSE of one render of the pair ([`pair_rel_mse`]).
+    pub pair_rel_mse: Option<f64>,
     /// The largest `|a − b| / max(|a|, |b|)` over pixels and channels.
     pub max_relative_difference: f32,
     /// The image's mean variance of the mean, when it records one.
@@ -83,6 +87,11 @@ pub fn run(req: &DiffRequest) -> Result<DiffOutcome> {
         ("REFERENCE", req.reference.as_path()),
     ];
     inputs.extend(req.regions.regions.as_deref().map(|p| ("--regions", p)));
+    inputs.extend(
+        req.pair_denominator
+            .as_deref()
+            .map(|p| ("--pair-denominator", p)),
+    );
     crate::image_io::check_outputs(&outputs, &inputs)?;
     let a = read_exr(&req.image)?;
     let r = read_exr(&req.reference)?;
@@ -106,9 +115,28 @@ pub fn run(req: &DiffRequest) -> Result<DiffOutcome> {
         check_writable(p)?;
     }
     let regions = req.regions.resolve(a.width, a.height)?;
+    let pair = match &req.pair_denominator {
+        Some(p) => {
+            let c = read_exr(p)?;
+            RenderMetadata::radiance(&c, p)?;
+            if (c.width, c.height) != (a.width, a.height) {
+                return Err(Error::Settings(format!(
+                    "{} is {}×{} but {} is {}×{}",
+                    p.display(),
+                    c.width,
+                    c.height,
+                    req.image.display(),
+                    a.width,
+                    a.height
+                )));
+            }
+            Some(pair_rel_mse(&a.pixels, &r.pixels, &c.pixels))
+        }
+        None => None,
+    };
     let mut out = DiffOutcome {
         metrics: metrics(&a.pixels, &r.pixels),
-        pair_rel_mse: pair_rel_mse(&a.pixels, &r.pixels),
+        pair_rel_mse: pair,
         max_relative_difference: max_relative_difference(&a.pixels, &r.pixels),
         variance: a.variance.as_deref().map(mean_variance),
         bias: a
@@ -164,11 +192,12 @@ impl DiffOutcome {
         t += &format!("RMSE               {:.6e}\n", m.rmse);
         t += &format!("MAE                {:.6e}\n", m.mae);
         t += &format!("mean signed error  {:+.6e}\n", m.mean_signed_error);
-        t += &format!(
-            "relMSE of one (pair) {:.6e} (were the two independent renders of one estimator: \
-             mean (a−b)²/(2(m²+0.01)), m = (a+b)/2)\n",
-            self.pair_rel_mse
-        );
+        if let Some(p) = self.pair_rel_mse {
+            t += &format!(
+                "relMSE of one (pair) {p:.6e} (the two as independent renders of one estimator: \
+                 mean (a−b)²/(2(c²+0.01)), c the --pair-denominator image)\n"
+            );
+        }
         t += &format!(
             "max relative difference {:.3e}\n",
             self.max_relative_difference

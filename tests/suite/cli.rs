@@ -422,6 +422,12 @@ fn images_whose_metadata_lies_about_their_size_are_refused() {
         "diff",
         "64×4",
     );
+    let (a_, b_) = (a.to_str().unwrap(), b.to_str().unwrap());
+    assert_one_line_error(
+        &vrpt(&["diff", a_, a_, "--pair-denominator", b_]),
+        "diff --pair-denominator",
+        "64×4",
+    );
     assert!(!m.exists());
 }
 
@@ -676,6 +682,11 @@ fn renders_state_their_error_and_adapt_on_request() {
     // diff prints the image's estimate beside the measured error; adaptive renders do not merge
     let out = vrpt(&["diff", exr.to_str().unwrap(), exr.to_str().unwrap()]);
     assert!(String::from_utf8_lossy(&out.stdout).contains("estimated relMSE"));
+    // a pair of identical images: the relMSE of one is 0, and only asked for is it printed
+    assert!(!String::from_utf8_lossy(&out.stdout).contains("(pair)"));
+    let e = exr.to_str().unwrap();
+    let out = vrpt(&["diff", e, e, "--pair-denominator", e]);
+    assert!(String::from_utf8_lossy(&out.stdout).contains("relMSE of one (pair) 0.000000e0"));
     let m = dir.path().join("m.exr");
     let out = vrpt(&[
         "merge",
