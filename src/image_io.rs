@@ -248,7 +248,7 @@ pub fn check_writable(path: &Path) -> Result<()> {
 
 /// What `path` names, for telling whether two paths are one file: canonical where it exists
 /// (symlinks, `./` and `..` resolved), else its folder's canonical path joined with its name.
-fn file_key(path: &Path) -> PathBuf {
+pub(crate) fn file_key(path: &Path) -> PathBuf {
     if let Ok(c) = path.canonicalize() {
         return c;
     }

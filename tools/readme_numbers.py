@@ -2,7 +2,7 @@
 """Measure every table the README's chapters (docs/*.md) show, in one run on one machine, and print
 them as markdown.
 
-    python3 tools/readme_numbers.py                 # every section (about 25 minutes on 2 cores)
+    python3 tools/readme_numbers.py                 # every section (a few hours on 2 cores)
     python3 tools/readme_numbers.py --only speed,error
     python3 tools/readme_numbers.py --list
 
@@ -461,7 +461,8 @@ def reuse():
     """docs/reuse.md's table: path reuse (`--reuse K`, K = 2, 3, 4) against the default at equal
     time, 10 s, every scene of the efficiency table at its size there, relMSE from seed pairs."""
     print("`vrpt render scenes/SCENE --width W --height H --spp 1048576 --time-limit 10 --seed S` "
-          "with and without `--reuse K`, seed pairs (1, 2) and (3, 4), configs interleaved; gain = "
+          "with and without `--reuse K`, seed pairs (1, 2) and (3, 4), configs interleaved, relMSE of one "
+          "render from its pair with one denominator render shared by every config (`vrpt diff --pair-denominator`); gain = "
           "relMSE(default) / relMSE(--reuse K):\n")
     ks = (2, 3, 4)
     configs = [("default", [])] + [(f"reuse {k}", ["--reuse", k]) for k in ks]
@@ -487,7 +488,8 @@ def roulette():
     each shipped scene at its own size, relMSE from seed pairs, EARS's continuations at the
     first vertex from `--stats`."""
     print("`vrpt render scenes/SCENE --spp 1048576 --time-limit 10 --seed S [--roulette ears]`, seed "
-          "pairs (1, 2) and (3, 4), configs interleaved; ratio = relMSE(classic) / relMSE(ears):\n")
+          "pairs (1, 2) and (3, 4), configs interleaved, relMSE of one render from its pair with one "
+          "denominator render shared by both (`vrpt diff --pair-denominator`); ratio = relMSE(classic) / relMSE(ears):\n")
     configs = [("classic", []), ("ears", ["--roulette", "ears"])]
     rows, ratios = [], []
     for scene in ROULETTE_SCENES:

@@ -74,7 +74,8 @@ pub fn metrics(image: &[Vec3], reference: &[Vec3]) -> Metrics {
 /// whichever render was low, up to `r²/ε` times too much where a pixel is heavy-tailed (on the
 /// textured scene at 2048 spp two pixels on the light's edge, values 0.28–2.4 from render to
 /// render, carried 82–99% of it, one term 39), and the pair's mean `(a + b)/2` is large exactly
-/// when a rare high sample made `(a − b)²` large, so such pixels count almost nothing. With `c`
+/// when a rare high sample made `(a − b)²` large, so such pixels count almost nothing (500× too
+/// little in the unit test's rare-event pixels). With `c`
 /// independent of the pair the expectation is `v·E[1/(c² + ε)]`: the relMSE weighed by `c`'s
 /// denominators. Estimators compared with the same `c` weigh every pixel alike whatever its
 /// noise in `c`, which is what a comparison needs.
@@ -379,19 +380,20 @@ mod tests {
     }
 
     /// The pair estimate against the relMSE its renders have by construction, `c` the true
-    /// image. Light tails: every value `1 + σ·g`, g normal (Box–Muller on hashed uniforms),
-    /// σ = 0.05: relMSE `σ²/1.01`; the terms are `σ²χ²₁/1.01`, relative sd √2 each, so over
-    /// 3·10⁴ values the mean's relative sd is 0.8%: 4% is five sd. Rare events: a value 0.1,
-    /// or 10 with probability 1% (mean 0.199, variance 0.9703, relMSE `0.9703/(0.199² + 0.01)`
-    /// = 19.5); a term is `(a − b)²/(2·0.0496)`, 0 when both are 0.1, about 988 when one of
-    /// them is 10 (probability 1.98%), so its relative sd is `√(1/0.0198)` ≈ 7.1 and the mean's
-    /// over 3·10⁴ values 4.1%: 20% is five sd. There `b` as the reference (halved) reads
-    /// `0.99·0.98/(2·0.02)` = 24.3, 1.25× too high (`b² + ε` is 0.02 unless b is the rare 10;
-    /// checked above 1.1×, three sd), and the pair's mean as the denominator about 400× too
-    /// low (`(a − b)²/(2(m² + ε))` ≈ 1.9 when the event happens).
+    /// image, over 4·10⁴ pixels (1.2·10⁵ values). Light tails: every value `1 + σ·g`, g normal
+    /// (Box–Muller on hashed uniforms), σ = 0.05: relMSE `σ²/1.01`; the terms are
+    /// `σ²χ²₁/1.01`, relative sd √2 each, so the mean's relative sd is 0.41%: 4% is ten sd.
+    /// Rare events: a value 0.1, or 10 with probability 1% (mean 0.199, variance 0.9703, relMSE
+    /// `0.9703/(0.199² + 0.01)` = 19.56); a term is `(a − b)²/(2·0.0496)`, 0 when both are 0.1,
+    /// about 988 when one of them is 10 (probability 1.98%), so its relative sd is
+    /// `√(0.98/0.0198)` ≈ 7.0 and the mean's 2.0%: 20% is ten sd. There `b` as the reference
+    /// (halved) reads `0.99·0.01·9.9²/(2·0.02)` = 24.3, 1.24× too high (`b² + ε` is 0.02 unless
+    /// b is the rare 10; its terms' relative sd is `√(0.99/0.0099)` = 10, the mean's 2.9%, so
+    /// the check above 1.1× has a margin of 3.9 sd), and the pair's mean as the denominator
+    /// about 500× too low (`(a − b)²/(2(m² + ε))` ≈ 1.92 when the event happens: 0.038).
     #[test]
     fn pair_rel_mse_estimates_one_renders_relmse() {
-        let n = 10_000;
+        let n = 40_000;
         let u = |k: u64| (crate::math::mix64(k) >> 11) as f64 / (1u64 << 53) as f64;
         let normal = |k: u64| {
             let (u1, u2) = (u(2 * k).max(1e-300), u(2 * k + 1));

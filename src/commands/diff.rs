@@ -1,6 +1,8 @@
 //! `vrpt diff`: an image against a reference: MSE, relMSE, RMSE, MAE, the mean signed error, the
 //! largest relative difference, where the image records it the variance of its mean and the
-//! bias z-scores, the same per region, and optionally a false-colour error map and a report.
+//! bias z-scores, the same per region, and optionally a false-colour error map and a report;
+//! with `--pair-denominator`, the relMSE of one of two independent renders estimated from the
+//! pair ([`pair_rel_mse`]).
 
 use super::{RegionArgs, Written};
 use crate::analysis::maps::write_error_map;
@@ -10,7 +12,7 @@ use crate::analysis::metrics::{
 };
 use crate::analysis::report::{number, Column, Report, Table};
 use crate::error::{Error, Result};
-use crate::image_io::{check_image_path, check_writable, read_exr, RgbImage};
+use crate::image_io::{check_image_path, check_writable, file_key, read_exr, RgbImage};
 use crate::output::{EstimateMethod, RenderMetadata};
 use glam::Vec3;
 use std::path::{Path, PathBuf};
@@ -28,9 +30,10 @@ pub struct DiffRequest {
     /// Write a self-contained HTML report: both images (HDR), error views, metrics.
     #[arg(long, value_name = "HTML")]
     pub report: Option<PathBuf>,
-    /// IMAGE and REFERENCE are two independent renders of one estimator: print the relMSE of one
-    /// of them, mean (a−b)²/(2(c²+0.01)), with c this image (another render, independent of
-    /// both; give every estimator compared the same one).
+    /// IMAGE and REFERENCE are two independent renders of one estimator: also print the relMSE of
+    /// one of them, mean (a−b)²/(2(c²+0.01)), with c this image (a third render, independent of
+    /// both; give every estimator compared the same one). The other metrics still take
+    /// REFERENCE as the reference.
     #[arg(long, value_name = "EXR")]
     pub pair_denominator: Option<PathBuf>,
     #[command(flatten)]
@@ -117,6 +120,16 @@ pub fn run(req: &DiffRequest) -> Result<DiffOutcome> {
     let regions = req.regions.resolve(a.width, a.height)?;
     let pair = match &req.pair_denominator {
         Some(p) => {
+            let key = file_key(p);
+            for (name, other) in [("IMAGE", &req.image), ("REFERENCE", &req.reference)] {
+                if file_key(other) == key {
+                    return Err(Error::Settings(format!(
+                        "--pair-denominator {} is {name}: the relMSE's r must come from a third \
+                         render, independent of both",
+                        p.display()
+                    )));
+                }
+            }
             let c = read_exr(p)?;
             RenderMetadata::radiance(&c, p)?;
             if (c.width, c.height) != (a.width, a.height) {

@@ -682,11 +682,16 @@ fn renders_state_their_error_and_adapt_on_request() {
     // diff prints the image's estimate beside the measured error; adaptive renders do not merge
     let out = vrpt(&["diff", exr.to_str().unwrap(), exr.to_str().unwrap()]);
     assert!(String::from_utf8_lossy(&out.stdout).contains("estimated relMSE"));
-    // a pair of identical images: the relMSE of one is 0, and only asked for is it printed
+    // a pair of identical images: the relMSE of one is 0, and only asked for is it printed; the
+    // denominator must be a third file
     assert!(!String::from_utf8_lossy(&out.stdout).contains("(pair)"));
-    let e = exr.to_str().unwrap();
-    let out = vrpt(&["diff", e, e, "--pair-denominator", e]);
+    let third = dir.path().join("third.exr");
+    std::fs::copy(&exr, &third).unwrap();
+    let (e, t) = (exr.to_str().unwrap(), third.to_str().unwrap());
+    let out = vrpt(&["diff", e, e, "--pair-denominator", t]);
     assert!(String::from_utf8_lossy(&out.stdout).contains("relMSE of one (pair) 0.000000e0"));
+    let out = vrpt(&["diff", e, t, "--pair-denominator", e]);
+    assert_one_line_error(&out, "diff --pair-denominator IMAGE", "is IMAGE");
     let m = dir.path().join("m.exr");
     let out = vrpt(&[
         "merge",
