@@ -100,17 +100,7 @@ pub fn run(req: &DiffRequest) -> Result<DiffOutcome> {
     let r = read_exr(&req.reference)?;
     RenderMetadata::radiance(&a, &req.image)?;
     RenderMetadata::radiance(&r, &req.reference)?;
-    if (a.width, a.height) != (r.width, r.height) {
-        return Err(Error::Settings(format!(
-            "{} is {}×{} but {} is {}×{}",
-            req.image.display(),
-            a.width,
-            a.height,
-            req.reference.display(),
-            r.width,
-            r.height
-        )));
-    }
+    same_size((&a, &req.image), (&r, &req.reference))?;
     if let Some(p) = &req.error_map {
         check_image_path(p)?;
     }
@@ -118,35 +108,7 @@ pub fn run(req: &DiffRequest) -> Result<DiffOutcome> {
         check_writable(p)?;
     }
     let regions = req.regions.resolve(a.width, a.height)?;
-    let pair = match &req.pair_denominator {
-        Some(p) => {
-            let key = file_key(p);
-            for (name, other) in [("IMAGE", &req.image), ("REFERENCE", &req.reference)] {
-                if file_key(other) == key {
-                    return Err(Error::Settings(format!(
-                        "--pair-denominator {} is {name}: the relMSE's r must come from a third \
-                         render, independent of both",
-                        p.display()
-                    )));
-                }
-            }
-            let c = read_exr(p)?;
-            RenderMetadata::radiance(&c, p)?;
-            if (c.width, c.height) != (a.width, a.height) {
-                return Err(Error::Settings(format!(
-                    "{} is {}×{} but {} is {}×{}",
-                    p.display(),
-                    c.width,
-                    c.height,
-                    req.image.display(),
-                    a.width,
-                    a.height
-                )));
-            }
-            Some(pair_rel_mse(&a.pixels, &r.pixels, &c.pixels))
-        }
-        None => None,
-    };
+    let pair = pair_rel_mse_of(req, &a, &r)?;
     let mut out = DiffOutcome {
         metrics: metrics(&a.pixels, &r.pixels),
         pair_rel_mse: pair,
@@ -194,6 +156,44 @@ pub fn run(req: &DiffRequest) -> Result<DiffOutcome> {
         });
     }
     Ok(out)
+}
+
+/// An error naming both files unless the images `x` (read from `xp`) and `y` have one size.
+fn same_size((x, xp): (&RgbImage, &Path), (y, yp): (&RgbImage, &Path)) -> Result<()> {
+    if (x.width, x.height) == (y.width, y.height) {
+        return Ok(());
+    }
+    Err(Error::Settings(format!(
+        "{} is {}×{} but {} is {}×{}",
+        xp.display(),
+        x.width,
+        x.height,
+        yp.display(),
+        y.width,
+        y.height
+    )))
+}
+
+/// With `--pair-denominator`: the relMSE of one of the renders `a` and `r` ([`pair_rel_mse`]),
+/// the denominator's image read and checked (a third file, of their size).
+fn pair_rel_mse_of(req: &DiffRequest, a: &RgbImage, r: &RgbImage) -> Result<Option<f64>> {
+    let Some(p) = &req.pair_denominator else {
+        return Ok(None);
+    };
+    let key = file_key(p);
+    for (name, other) in [("IMAGE", &req.image), ("REFERENCE", &req.reference)] {
+        if file_key(other) == key {
+            return Err(Error::Settings(format!(
+                "--pair-denominator {} is {name}: the relMSE's r must come from a third \
+                 render, independent of both",
+                p.display()
+            )));
+        }
+    }
+    let c = read_exr(p)?;
+    RenderMetadata::radiance(&c, p)?;
+    same_size((&c, p), (a, &req.image))?;
+    Ok(Some(pair_rel_mse(&a.pixels, &r.pixels, &c.pixels)))
 }
 
 impl DiffOutcome {
