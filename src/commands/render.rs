@@ -402,6 +402,7 @@ impl RenderRequest {
             min_allocation_gain: self.error.min_allocation_gain,
             target_error: self.error.target_error,
             strip: None,
+            guide: None,
         })
     }
 }
@@ -427,9 +428,7 @@ impl PreparedRender {
         };
         let choice = auto::choose(&self.scene, &self.settings, &self.plan, candidates)?;
         self.settings = choice.settings(&self.settings);
-        if let Some(t) = &mut self.plan.time_limit {
-            *t = t.saturating_sub(choice.elapsed);
-        }
+        self.plan = choice.plan(&self.plan);
         Ok(Some(choice))
     }
 

@@ -258,17 +258,12 @@ impl ErrorEstimate {
 /// The estimated MSE and relMSE of a `width`-wide image from its pixels' estimated variances
 /// (see [`squared_reference`] for the relMSE's denominator).
 pub fn image_error(width: u32, mean: &[Vec3], variance: &[Vec3]) -> (f64, f64) {
-    let r2 = squared_reference(width, mean, variance);
-    let (mut mse, mut rel) = (0.0, 0.0);
-    for (v, r2) in variance.iter().zip(&r2) {
-        for c in 0..3 {
-            let v = v[c] as f64;
-            mse += v;
-            rel += v / (r2[c] + REL_EPSILON);
-        }
-    }
     let n = (mean.len() * 3).max(1) as f64;
-    (mse / n, rel / n)
+    let mse = (variance.iter())
+        .map(|v| v.as_dvec3().element_sum())
+        .sum::<f64>();
+    let rel = rel_mse_against(&squared_reference(width, mean, variance), variance).0;
+    (mse / n, rel)
 }
 
 /// The standard error of [`image_error`]'s relMSE: the spread of its terms `v̂/(r² + 0.01)` over
@@ -276,10 +271,17 @@ pub fn image_error(width: u32, mean: &[Vec3], variance: &[Vec3]) -> (f64, f64) {
 /// values as well as by noise, so this overstates the noise of the estimate: a conservative
 /// margin for deciding between two estimates, not a calibrated error.
 pub fn rel_mse_standard_error(width: u32, mean: &[Vec3], variance: &[Vec3]) -> f64 {
-    let r2 = squared_reference(width, mean, variance);
+    rel_mse_against(&squared_reference(width, mean, variance), variance).1
+}
+
+/// The relMSE `mean(v̂/(r² + 0.01))` of an image whose pixels' estimated variances are
+/// `variance`, against squared references `r2` given per pixel and channel (so estimates of
+/// several images can weigh their pixels alike), and its standard error as in
+/// [`rel_mse_standard_error`].
+pub fn rel_mse_against(r2: &[DVec3], variance: &[Vec3]) -> (f64, f64) {
     let terms = variance
         .iter()
-        .zip(&r2)
+        .zip(r2)
         .flat_map(|(v, r2)| (0..3).map(move |c| v[c] as f64 / (r2[c] + REL_EPSILON)));
     let (mut n, mut sum, mut sum_sq) = (0.0f64, 0.0f64, 0.0f64);
     for t in terms {
@@ -288,10 +290,10 @@ pub fn rel_mse_standard_error(width: u32, mean: &[Vec3], variance: &[Vec3]) -> f
         sum_sq += t * t;
     }
     if n < 2.0 {
-        return f64::INFINITY;
+        return (sum / n.max(1.0), f64::INFINITY);
     }
     let var = ((sum_sq - sum * sum / n) / (n - 1.0)).max(0.0);
-    (var / n).sqrt()
+    (sum / n, (var / n).sqrt())
 }
 
 /// An estimate of each pixel's `r²` for the relMSE's denominator `r² + 0.01`, where the true

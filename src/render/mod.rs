@@ -48,8 +48,8 @@ pub use settings::{RenderSettings, ACTING_REPLICATES, MAX_REUSE};
 pub use stats::{GuideStats, RenderStats, RrsStats};
 pub use strip::TileStrip;
 use tile::{tile_count, Alloc, Batch, BatchOutput, Kernel, Samples};
-pub use training::learn_guide;
 use training::Trainer;
+pub use training::{learn_guide, learn_guide_with, LearnedGuide, TrainingBudget};
 
 /// Tile edge in pixels.
 pub const TILE: u32 = 16;
@@ -210,6 +210,10 @@ pub struct PassPlan {
     /// width and height are then the strip's, the camera the image's. `--strategy auto`'s
     /// pilots render one.
     pub strip: Option<Arc<TileStrip>>,
+    /// A guide learned before the render: a guided render samples with it and does not train
+    /// (`--strategy auto` hands over its guided pilot's; [`LearnedGuide`]). Ignored by a render
+    /// whose directions are not guided.
+    pub guide: Option<Arc<LearnedGuide>>,
 }
 
 /// Wall time the samples that a stopped render takes after the stop aim at (see
@@ -342,23 +346,17 @@ pub fn render_passes_with<F: SamplerFactory>(
     factory: &F,
     progress: &dyn Progress,
 ) -> Result<Rendered> {
-    let camera = match &plan.strip {
-        Some(strip) => {
-            strip.check(settings.width, settings.height)?;
-            let image = RenderSettings {
-                width: strip.image.x,
-                height: strip.image.y,
-                ..settings.clone()
-            };
-            camera_for(scene, &image)?
-        }
-        None => camera_for(scene, settings)?,
-    };
+    let camera = strip_camera(scene, settings, plan)?;
     check_plan(settings, plan)?;
     let start = Instant::now();
     with_threads(settings.threads, || {
         let mut stats = RenderStats::default();
-        let tree = (settings.strategy.directions == Directions::Guided).then(|| {
+        let guided = settings.strategy.directions == Directions::Guided;
+        let learned = plan.guide.as_deref().filter(|_| guided);
+        if let Some(l) = learned {
+            stats.guide = Some(l.stats);
+        }
+        let tree = (guided && learned.is_none()).then(|| {
             let trainer = Trainer {
                 scene,
                 camera: &camera,
@@ -366,10 +364,11 @@ pub fn render_passes_with<F: SamplerFactory>(
                 plan,
                 factory,
             };
-            trainer.train(start, &mut stats)
+            trainer.train(start, TrainingBudget::of_render(settings, plan), &mut stats)
         });
+        let tree = learned.map(|l| &l.tree).or(tree.as_ref());
         let guide = Guiding {
-            tree: tree.as_ref(),
+            tree,
             record: false,
         };
         let trainer = Trainer {
@@ -379,8 +378,8 @@ pub fn render_passes_with<F: SamplerFactory>(
             plan,
             factory,
         };
-        let rrs = (settings.roulette == Roulette::Ears)
-            .then(|| trainer.train_rrs(tree.as_ref(), &mut stats));
+        let rrs =
+            (settings.roulette == Roulette::Ears).then(|| trainer.train_rrs(tree, &mut stats));
         let training = start.elapsed();
         let job = Job {
             kernel: Kernel::new(scene, &camera, settings, factory, guide, progress)
@@ -396,7 +395,7 @@ pub fn render_passes_with<F: SamplerFactory>(
             job.uniform(&mut stats)?
         };
         stats.elapsed = start.elapsed();
-        if let (Some(t), Some(g)) = (&tree, &mut stats.guide) {
+        if let (Some(t), Some(g)) = (tree, &mut stats.guide) {
             g.final_time = stats.elapsed - training;
             g.tree = t.size();
         }
@@ -409,6 +408,23 @@ pub fn render_passes_with<F: SamplerFactory>(
             .map(|s| s.first_vertex_map(scene, &camera, (settings.width, settings.height)));
         Ok(r)
     })?
+}
+
+/// The camera of a render of `settings` under `plan`: the image's, whose size is the strip's
+/// image where `plan` renders a strip (checked against the settings' size, the strip's).
+fn strip_camera(scene: &Scene, settings: &RenderSettings, plan: &PassPlan) -> Result<Camera> {
+    match &plan.strip {
+        Some(strip) => {
+            strip.check(settings.width, settings.height)?;
+            let image = RenderSettings {
+                width: strip.image.x,
+                height: strip.image.y,
+                ..settings.clone()
+            };
+            camera_for(scene, &image)
+        }
+        None => camera_for(scene, settings),
+    }
 }
 
 /// Whether `plan` can render `settings`: replicates that fit the spp, adaptive rounds with the

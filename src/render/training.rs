@@ -15,32 +15,75 @@ pub(super) struct Trainer<'a, F: SamplerFactory> {
     pub(super) factory: &'a F,
 }
 
+/// How much a guide's training may spend: its iterations' samples per pixel in all, and the wall
+/// time by which the last one must be expected to end (from the start the training is given).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TrainingBudget {
+    /// The iterations' spp in all (at least one iteration runs).
+    pub spp: u64,
+    /// An iteration starts only if it is expected (at the last one's speed per pixel sample) to
+    /// end by then.
+    pub time: Option<Duration>,
+}
+
+impl TrainingBudget {
+    /// A guided render's own training: half its spp, and a third of its time limit.
+    pub fn of_render(settings: &RenderSettings, plan: &PassPlan) -> TrainingBudget {
+        TrainingBudget {
+            spp: (settings.spp as u64 / 2).max(1),
+            time: plan.time_limit.map(|t| t / 3),
+        }
+    }
+}
+
+/// A guide learned before a render, which a guided render given it ([`PassPlan::guide`])
+/// samples with instead of training its own: `--strategy auto`'s guided pilot hands its guide
+/// to the render it chooses.
+#[derive(Clone, PartialEq)]
+pub struct LearnedGuide {
+    /// The guide.
+    pub tree: Guide,
+    /// Its training (the final iteration's time is the render's to fill in).
+    pub stats: GuideStats,
+}
+
+impl std::fmt::Debug for LearnedGuide {
+    /// The training and the tree's size, not the whole tree.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("LearnedGuide")
+            .field("stats", &self.stats)
+            .field("tree", &self.tree.size())
+            .finish()
+    }
+}
+
 impl<F: SamplerFactory> Trainer<'_, F> {
     /// The training iterations of a guided render (see [`crate::guiding`]): iterations of 1,
-    /// 2, 4, … spp, each sampling with the tree the previous ones taught and recording into the
-    /// next, while their sum stays within half the render's spp (at least one iteration), and
-    /// with a time limit while the next iteration (estimated at twice the last) would end within
-    /// a third of it (the render began at `start`). A set stop flag ends the training.
-    /// Training's rays and thread time are added to `stats`, and its [`GuideStats`] set there.
-    pub(super) fn train(&self, start: Instant, stats: &mut RenderStats) -> Guide {
+    /// 2, 4, … spp, each sampling with the tree the earlier ones taught and recording into the
+    /// next, while their sum stays within `budget.spp` (at least one iteration), and while the
+    /// next iteration (estimated at twice the last's time per pixel sample) would end by
+    /// `budget.time` after `start`. A set stop flag ends the training. Training's rays and
+    /// thread time are added to `stats`, and its [`GuideStats`] set there.
+    pub(super) fn train(
+        &self,
+        start: Instant,
+        budget: TrainingBudget,
+        stats: &mut RenderStats,
+    ) -> Guide {
         let (lo, hi) = scene_bounds(self.scene);
         let mut tree = Guide::new(lo, hi);
-        let budget = (self.settings.spp as u64 / 2).max(1);
         let mut g = GuideStats::default();
         let mut last = Duration::ZERO;
         for k in 0u32..32 {
             let spp = 1u64 << k;
             if k > 0 {
-                let over_time = self
-                    .plan
-                    .time_limit
-                    .is_some_and(|t| start.elapsed() + 2 * last > t / 3);
+                let over_time = budget.time.is_some_and(|t| start.elapsed() + 2 * last > t);
                 let stopped = self
                     .plan
                     .stop
                     .as_ref()
                     .is_some_and(|f| f.load(Ordering::Relaxed));
-                if g.training_spp + spp > budget || over_time || stopped {
+                if g.training_spp + spp > budget.spp || over_time || stopped {
                     break;
                 }
             }
@@ -167,7 +210,25 @@ fn sample_pieces(tiles: &Range<u32>, samples: Range<u64>) -> Vec<Range<u64>> {
 /// The guide a guided render of `scene` with `settings` learns before its final iteration (the
 /// same seeds and budget: the same tree), with the training's stats.
 pub fn learn_guide(scene: &Scene, settings: &RenderSettings) -> Result<(Guide, RenderStats)> {
-    let camera = camera_for(scene, settings)?;
+    let plan = PassPlan::default();
+    learn_guide_with(
+        scene,
+        settings,
+        &plan,
+        TrainingBudget::of_render(settings, &plan),
+    )
+}
+
+/// The guide a guided render of `scene` with `settings` and `plan` (its strip, its stop flag)
+/// learns within `budget`, with the training's stats: the iterations of [`learn_guide`], with
+/// a budget of the caller's.
+pub fn learn_guide_with(
+    scene: &Scene,
+    settings: &RenderSettings,
+    plan: &PassPlan,
+    budget: TrainingBudget,
+) -> Result<(Guide, RenderStats)> {
+    let camera = strip_camera(scene, settings, plan)?;
     with_threads(settings.threads, || {
         let mut stats = RenderStats::default();
         let start = Instant::now();
@@ -175,24 +236,25 @@ pub fn learn_guide(scene: &Scene, settings: &RenderSettings) -> Result<(Guide, R
             &'a Scene,
             &'a Camera,
             &'a RenderSettings,
+            &'a PassPlan,
+            TrainingBudget,
             Instant,
             &'a mut RenderStats,
         );
         impl WithSampler for Train<'_> {
             type Out = Guide;
             fn run<F: SamplerFactory>(self, factory: &F) -> Guide {
-                let plan = PassPlan::default();
                 let trainer = Trainer {
                     scene: self.0,
                     camera: self.1,
                     settings: self.2,
-                    plan: &plan,
+                    plan: self.3,
                     factory,
                 };
-                trainer.train(self.3, self.4)
+                trainer.train(self.5, self.4, self.6)
             }
         }
-        let work = Train(scene, &camera, settings, start, &mut stats);
+        let work = Train(scene, &camera, settings, plan, budget, start, &mut stats);
         let tree = with_sampler(settings.strategy.sampler, work);
         stats.elapsed = start.elapsed();
         (tree, stats)

@@ -1,6 +1,7 @@
 //! Path guiding's directional quadtrees: sampling agrees with the pdf (chi-square), the pdf
 //! integrates to 1, and the maps between directions and the canonical square agree — for a
-//! hand-built tree and for trees learned in the shipped Cornell box.
+//! hand-built tree and for trees learned in the shipped Cornell box; and a guide handed to a
+//! render is the guide it samples with.
 //!
 //! The chi-square bins the canonical square `[0,1)²` into a 32×32 grid. A quadtree's density is
 //! constant on dyadic squares no deeper than the tree, so each bin's expected mass is computed
@@ -202,4 +203,70 @@ fn learned_quadtrees_sample_their_pdf() {
         assert!(t.node_count() > 4, "{p}: {} nodes", t.node_count());
         check_tree(&format!("learned at {p}"), t, common::seed(10 + k as u64));
     }
+}
+
+/// A guide handed to a render ([`PassPlan::guide`], as `--strategy auto` hands over its guided
+/// pilot's) is the guide the render samples with, and the render trains none of its own: a
+/// guided render given the guide `learn_guide` learns with the render's own seeds and budget is
+/// the render that trains it itself, bit for bit, with the same training stats; given a guide
+/// learned with another seed, its image differs (so the given guide is what sampled it); a
+/// render whose directions are not guided ignores a given guide.
+#[test]
+fn a_handed_over_guide_renders_as_the_guide_learned_in_place() {
+    use std::sync::Arc;
+    use vrpt::render::{render_passes, LearnedGuide, NoProgress, PassPlan};
+    let scene = common::shipped("cornell-box");
+    let settings = RenderSettings {
+        width: 32,
+        height: 32,
+        spp: 16,
+        max_depth: 5,
+        seed: common::seed(21),
+        strategy: Strategy::of(
+            SamplerKind::Stratified,
+            Directions::Guided,
+            LightStrategy::Mis,
+        ),
+        ..Default::default()
+    };
+    let learned = |settings: &RenderSettings| {
+        let (tree, stats) = learn_guide(&scene, settings).unwrap();
+        let stats = stats.guide.unwrap();
+        Some(Arc::new(LearnedGuide { tree, stats }))
+    };
+    let render = |settings: &RenderSettings, guide| {
+        let plan = PassPlan {
+            guide,
+            ..PassPlan::default()
+        };
+        render_passes(&scene, settings, &plan, &NoProgress).unwrap()
+    };
+    let own = render(&settings, None);
+    let given = learned(&settings);
+    let handed = render(&settings, given.clone());
+    assert_eq!(handed.film.mean_image(), own.film.mean_image());
+    let (a, b) = (handed.stats.guide.unwrap(), own.stats.guide.unwrap());
+    assert_eq!(
+        (a.iterations, a.training_spp),
+        (b.iterations, b.training_spp)
+    );
+    assert_eq!(a.tree, b.tree);
+    // the training's rays are the learner's, not the render's: the handed render traced fewer
+    assert!(handed.stats.rays.total() < own.stats.rays.total());
+    let other = learned(&RenderSettings {
+        seed: common::seed(22),
+        ..settings.clone()
+    });
+    assert_ne!(
+        render(&settings, other).film.mean_image(),
+        own.film.mean_image()
+    );
+    let phong = RenderSettings {
+        strategy: Strategy::default(),
+        ..settings.clone()
+    };
+    let plain = render(&phong, None);
+    let ignored = render(&phong, given);
+    assert_eq!(ignored.film.mean_image(), plain.film.mean_image());
+    assert!(ignored.stats.guide.is_none());
 }

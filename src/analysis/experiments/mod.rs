@@ -100,11 +100,7 @@ impl Entry<'static> {
             render: Box::new(move |scene, settings, plan| {
                 let choice = crate::render::auto::choose(scene, settings, plan, &candidates)?;
                 let settings = choice.settings(settings);
-                let plan = PassPlan {
-                    time_limit: (plan.time_limit).map(|t| t.saturating_sub(choice.elapsed)),
-                    ..plan.clone()
-                };
-                let mut r = render_passes(scene, &settings, &plan, &NoProgress)?;
+                let mut r = render_passes(scene, &settings, &choice.plan(plan), &NoProgress)?;
                 r.stats.elapsed += choice.elapsed;
                 Ok(r)
             }),

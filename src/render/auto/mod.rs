@@ -10,8 +10,15 @@
 //! the same spread quarter (or half) of the image's tiles ([`pilot_strip`]: a pilot costs a
 //! quarter of what the whole image would, and the choice is made from the same tiles for
 //! every candidate). A pilot gives the pilot's relMSE, estimated from its replicates' spread
-//! (honest for every sampler, [`crate::estimate`]), with a standard error from the spread of the
-//! pixels' terms, and its cost. Its efficiency is `e = 1/(relMSE × cost)`: both factors scale
+//! (honest for every sampler, [`crate::estimate`]) against one denominator `r² + 0.01` shared by
+//! every candidate (`r²` estimated from the mean of all the pilots' images), with a standard
+//! error from the spread of the pixels' terms, and its cost. Each pilot's own image as the
+//! denominator, as a render's estimate takes it, fails a pilot: at a pilot's few samples a
+//! pixel's mean is mostly noise, so its relMSE saturates near one whatever the estimator (the
+//! gap's mis render at 16, 64 and 256 spp estimates 0.18, 0.20 and 0.17, its MSE falling as
+//! 1/N), and where one pilot met a rare bright path its own bright mean hides it: the gap's
+//! pilots read path reuse 0.65× as efficient as mis so, and 1.12× against the shared
+//! denominator (it is 2.1× at 10 s). Its efficiency is `e = 1/(relMSE × cost)`: both factors scale
 //! with the samples (relMSE as 1/spp, cost as spp), so pilots of any size compare. Path reuse
 //! correlates neighbouring pixels' errors; each pixel's variance is still estimated honestly by
 //! its replicates, but the standard error, which counts the pixels' terms as independent, is
@@ -19,13 +26,14 @@
 //! by about ρ² ≈ 0.1).
 //!
 //! The cost is the wall time under a time limit (such a render is not deterministic anyway),
-//! and otherwise a count of work: the rays traced, training rays included, with each shadow ray
+//! and otherwise a count of work: the rays traced (an EARS candidate's training in its pilot
+//! included; a guided candidate's guide training not, as a cost sunk before its pilot that the
+//! render chosen does not pay again), with each shadow ray
 //! of a reuse connection weighed [`CONNECTION_COST`] (it is a shadow ray and two BSDF
 //! evaluations, no surface to shade; see the constant for the measurement) and each ray of an
 //! EARS candidate weighed [`EARS_RAY_COST`] (its cache lookups and recursion). A count is the same
-//! for every thread count, so the choice, and the image, are too. Rays weigh a guided vertex's
-//! extra work (the guide's lookup and sampling) as nothing, so a guided candidate looks
-//! cheaper by rays than by time. Under a time limit the pilots' wall time is noisy (a tenth
+//! for every thread count, so the choice, and the image, are too; a guided candidate's rays
+//! weigh [`GUIDED_RAY_COST`] (the guide's lookups and descents). Under a time limit the pilots' wall time is noisy (a tenth
 //! of a second on a strip, on a shared machine: textured's reuse pilot once took 1.14× the mis
 //! pilot's time, and 1.5–1.9× in three other renders, which switched the choice there), but
 //! rays miss what a ray costs in each scene: counted in rays at 10 s the door's pilots read
@@ -34,22 +42,34 @@
 //!
 //! The rule, fixed before any pilot renders: the most efficient candidate is chosen if its
 //! efficiency exceeds the first candidate's (the default) with `z = ln(e/e₀)/√(s² + s₀²) >`
-//! [`SWITCH_Z`], `s = se(relMSE)/relMSE`; otherwise the first. The pilots' samples are
+//! [`SWITCH_Z`], `s = se(relMSE)/relMSE`; otherwise the first. (The noise of the pilots' wall
+//! times is not in `z`: counted at its measured 12% per pilot, it kept mis in one of four renders
+//! of the door and door-dark, where reuse wins 3–4×, and the geometric mean of the equal-time
+//! gain over mis fell from 1.48× to 1.29×; see `docs/performance.md`.) The pilots' samples are
 //! discarded, and the image is the chosen candidate's render with the render's own seed: the
-//! same image as `--strategy CHOSEN [--reuse K | --roulette ears]`, so each choice is unbiased and so is their
-//! mixture.
+//! same image as `--strategy CHOSEN [--reuse K | --roulette ears]` (but for a guided candidate's
+//! guide, below), so each choice is unbiased and so is their mixture.
 //!
-//! A pilot sees the budget of a pilot: a guide trained on 1/16 of the samples has learned less
-//! than one trained on all of them, so the pilot understates guiding at large budgets (it chose
-//! guided directions in none of 44 renders of the shipped scenes, where guided renders won up
-//! to 3.6×): guided directions are not among the default candidates. Path reuse learns nothing,
+//! A guided candidate (`stratified+guided+mis`) first learns its guide on the pilots' strip,
+//! with its training's own seeds and a budget of [`GUIDE_SHARE`] of the render's (half as many
+//! samples per pixel of the strip as a guided render's own training takes per pixel of the
+//! image), and its pilot samples with that guide; if it is chosen, the render samples with
+//! the same guide and does not train ([`PassPlan::guide`]): nothing the pilot learned is
+//! thrown away, and the pilot measured the guide the image is rendered with. Its image is then
+//! not `--directions guided`'s (whose guide trains on the whole image), but unbiased for the
+//! same reason: the guide and the choice come from samples independent of the image's.
+//! Guided directions are still not among the default candidates: their pilots see the light
+//! that comes by rare paths no better than the others' (on the gap, door-dark and the glass
+//! scene at 10 s the guided pilot read 0.35–1.16× the efficiency of mis, where guided renders
+//! win 1.5–4.2× over mis), and the guide's training would cost every render a sixteenth of its
+//! budget. Path reuse learns nothing,
 //! so a pilot sees what the render will get; EARS learns its factors from its pilot's own
 //! training, shorter than a render's, and is not a default candidate either (where it wins,
 //! `mis+reuse4` wins more: `docs/roulette.md`).
 
-use super::{render_passes, NoProgress, PassPlan, RenderSettings, TileStrip, TILE};
+use super::{LearnedGuide, PassPlan, RenderSettings, TileStrip, TrainingBudget};
+use crate::bsdf::Directions;
 use crate::error::Result;
-use crate::estimate::rel_mse_standard_error;
 use crate::integrator::reuse::MAX_REUSE;
 use crate::integrator::rrs::Roulette;
 use crate::scene::Scene;
@@ -69,7 +89,7 @@ pub const PILOT_TILES: usize = 12;
 
 /// The z above which the most efficient candidate replaces the first: a false switch between
 /// two equally efficient candidates has a one-sided normal probability of 2.3%, and the
-/// standard errors are conservative ([`rel_mse_standard_error`]).
+/// standard errors are conservative ([`crate::estimate::rel_mse_against`]).
 pub const SWITCH_Z: f64 = 2.0;
 
 /// What one shadow ray of a reuse connection costs, in rays of the rest of the render (each
@@ -89,6 +109,14 @@ pub const CONNECTION_COST: f64 = 0.6;
 /// 1.34, door 1.24, glossy plates 1.17, night-hall 1.23; with 1.25 a pilot's cost is within
 /// about ±7% of its time on all four.
 pub const EARS_RAY_COST: f64 = 1.25;
+
+/// What one ray of a guided candidate costs, in rays of the same strategy with Phong
+/// directions: the S-tree lookup and the quadtree descents at each vertex. Measured on one
+/// thread, 128×96 at 32 spp, time per ray of a render given its guide (a guided candidate's
+/// render: no training, no records) over `--strategy mis`, two runs each: Cornell box 1.49,
+/// 1.18; door 1.98, 1.56; glossy plates 1.36, 1.49; gap 1.84, 1.36; the median 1.49. (With the
+/// training, as `--directions guided` renders, 1.7–2.2.)
+pub const GUIDED_RAY_COST: f64 = 1.5;
 
 /// One of `--strategy auto`'s candidates: a strategy, the side of its path-reuse blocks (1:
 /// none; [`crate::integrator::reuse`]) and its roulette ([`Roulette`]). Named as the strategy
@@ -201,8 +229,9 @@ impl Candidates {
 pub const AUTO_REUSE: u32 = 4;
 
 /// The candidates when none are named: today's default (stratified points, Phong directions,
-/// MIS), and the same with path reuse in blocks of [`AUTO_REUSE`]². Not guided directions: a
-/// pilot cannot see what a guide trained on the whole budget gains (the module doc).
+/// MIS), and the same with path reuse in blocks of [`AUTO_REUSE`]². Not guided directions: their
+/// pilots do not see what guiding gains where it wins, and their training costs (the module
+/// doc).
 pub fn default_candidates() -> Vec<Candidate> {
     let mis = Strategy::default();
     vec![
@@ -217,8 +246,10 @@ pub fn default_candidates() -> Vec<Candidate> {
 /// What a pilot's cost counts.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Cost {
-    /// Rays traced (camera, bounce, shadow; training included), a reuse connection's shadow
-    /// ray weighed [`CONNECTION_COST`], every ray of an EARS candidate [`EARS_RAY_COST`].
+    /// Rays traced (camera, bounce, shadow; an EARS pilot's training included, a guided
+    /// candidate's guide training not), a reuse connection's shadow ray weighed
+    /// [`CONNECTION_COST`], every ray of an EARS candidate [`EARS_RAY_COST`], of a guided one
+    /// [`GUIDED_RAY_COST`].
     Rays,
     /// Wall seconds.
     Seconds,
@@ -231,9 +262,10 @@ pub struct PilotRow {
     pub candidate: Candidate,
     /// Samples per pixel of the pilot (all replicates).
     pub spp: u32,
-    /// The estimated relMSE ([`crate::estimate::ErrorEstimate`]).
+    /// The relMSE estimated from its replicates, against the denominator every pilot shares
+    /// (the module doc).
     pub rel_mse: f64,
-    /// Its standard error ([`rel_mse_standard_error`]).
+    /// Its standard error ([`crate::estimate::rel_mse_against`]).
     pub rel_mse_se: f64,
     /// Rays or seconds ([`Choice::cost`]).
     pub cost: f64,
@@ -260,6 +292,28 @@ pub struct Choice {
     pub elapsed: Duration,
     /// The tiles the pilots rendered, and the image's (partial ones included).
     pub tiles: (u32, u32),
+    /// The guide the chosen candidate's pilot learned, when its directions are guided: the
+    /// render samples with it ([`PassPlan::guide`]).
+    pub guide: Option<Arc<LearnedGuide>>,
+}
+
+/// The share of the render's budget a guided candidate's guide trains on, before its pilot: its
+/// training iterations ([`crate::guiding`]) on the pilots' strip take at most this share of the
+/// time limit, and of the render's samples (`spp × GUIDE_SHARE / strip share` samples per pixel
+/// of the strip, so about this share of the render's cost). On a strip of a quarter of the
+/// image that is `spp/4` samples per pixel of it, half of the `spp/2` a guided render's own
+/// training takes per pixel of the image (under a time limit `T/16` on a quarter of the
+/// pixels, about the `T/4` of a whole image, against its `T/3`); the render chosen samples with
+/// this guide and trains no more.
+pub const GUIDE_SHARE: f64 = 1.0 / 16.0;
+
+/// The training budget of a guided candidate's guide for a render of `spp` under `time_limit`,
+/// trained on a strip of `share` of the image's pixels ([`GUIDE_SHARE`]).
+pub fn guide_budget(spp: u32, share: f64, time_limit: Option<Duration>) -> TrainingBudget {
+    TrainingBudget {
+        spp: ((spp as f64 * GUIDE_SHARE / share.clamp(1e-6, 1.0)) as u64).max(1),
+        time: time_limit.map(|t| t.mul_f64(GUIDE_SHARE)),
+    }
 }
 
 /// The seed of every candidate's pilot in a render of seed `seed` (common random numbers: see
@@ -322,53 +376,27 @@ pub fn choose(
         Some(_) => Cost::Seconds,
         None => Cost::Rays,
     };
-    let strip = pilot_strip(settings.width, settings.height).map(Arc::new);
-    let (width, height) = strip
-        .as_ref()
-        .map_or((settings.width, settings.height), |s| s.size());
-    let image_tiles = settings.width.div_ceil(TILE) * settings.height.div_ceil(TILE);
-    let tiles = strip
-        .as_ref()
-        .map_or(image_tiles, |s| s.origins.len() as u32);
-    let pilot = |k: usize, spp: u32| -> Result<PilotRow> {
-        let s = RenderSettings {
-            seed: pilot_seed(settings.seed),
-            first_sample: 0,
-            spp,
-            replicates: PILOT_REPLICATES,
-            width,
-            height,
-            ..candidates[k].settings(settings)
-        };
-        let p = PassPlan {
-            stop: plan.stop.clone(),
-            strip: strip.clone(),
-            ..PassPlan::default()
-        };
-        let r = render_passes(scene, &s, &p, &NoProgress)?;
-        Ok(pilot_row(candidates[k], &r, cost))
-    };
-    let mut rows = Vec::with_capacity(candidates.len());
+    let mut pilots = Pilots::new(scene, settings, plan, candidates, cost);
+    let mut done = Vec::with_capacity(candidates.len());
     let spp = match plan.time_limit {
         None => pilot_spp(settings.spp),
         Some(limit) => {
             // the first candidate's speed, from a pilot of one sample per replicate, and the
             // spp the image would take at it in the time limit
-            let probe = pilot(0, PILOT_REPLICATES)?;
-            let pixels = |w: u32, h: u32| w as f64 * h as f64;
-            let image = pixels(settings.width, settings.height) / pixels(width, height);
-            let per_spp = probe.seconds / probe.spp as f64 * image;
+            let probe = pilots.run(0, PILOT_REPLICATES)?;
+            let per_spp = probe.seconds / probe.spp as f64 / pilots.share;
             let fits = limit.as_secs_f64() / per_spp.max(1e-12);
             let spp = pilot_spp((fits as u32).min(settings.spp));
             if spp == probe.spp {
-                rows.push(probe);
+                done.push(probe);
             }
             spp
         }
     };
-    for k in rows.len()..candidates.len() {
-        rows.push(pilot(k, spp)?);
+    for k in done.len()..candidates.len() {
+        done.push(pilots.run(k, spp)?);
     }
+    let rows = shared_denominator(pilots.width, done);
     let (index, z) = decide(&rows);
     Ok(Choice {
         candidate: candidates[index],
@@ -377,38 +405,9 @@ pub fn choose(
         cost,
         z,
         elapsed: start.elapsed(),
-        tiles: (tiles, image_tiles),
+        tiles: pilots.tiles,
+        guide: pilots.guides.swap_remove(index),
     })
-}
-
-/// What the pilot `r` of `candidate` measured: its relMSE with its standard error, and its cost
-/// counted as `cost` says.
-fn pilot_row(candidate: Candidate, r: &super::Rendered, cost: Cost) -> PilotRow {
-    let mean = r.film.mean_image();
-    let e = &r.estimate;
-    let se = rel_mse_standard_error(r.film.width, &mean, &e.variance);
-    let rays = &r.stats.rays;
-    let seconds = r.stats.elapsed.as_secs_f64();
-    let spent = match cost {
-        Cost::Rays => {
-            let connections = rays.connection as f64;
-            let weighed = (rays.total() as f64 - connections) + CONNECTION_COST * connections;
-            match candidate.roulette {
-                Roulette::Ears => EARS_RAY_COST * weighed,
-                Roulette::Classic => weighed,
-            }
-        }
-        Cost::Seconds => seconds,
-    };
-    PilotRow {
-        candidate,
-        spp: r.spp,
-        rel_mse: e.rel_mse,
-        rel_mse_se: se,
-        cost: spent,
-        efficiency: 1.0 / (e.rel_mse * spent),
-        seconds,
-    }
 }
 
 impl Choice {
@@ -416,6 +415,16 @@ impl Choice {
     /// strategy, reuse and roulette.
     pub fn settings(&self, settings: &RenderSettings) -> RenderSettings {
         self.candidate.settings(settings)
+    }
+
+    /// The plan of the render after the pilots: `plan` with the time the pilots did not use,
+    /// and the chosen candidate's guide when it learned one.
+    pub fn plan(&self, plan: &PassPlan) -> PassPlan {
+        PassPlan {
+            time_limit: (plan.time_limit).map(|t| t.saturating_sub(self.elapsed)),
+            guide: self.guide.clone(),
+            ..plan.clone()
+        }
     }
 
     /// The pilots as a table, and the choice, for the terminal.
@@ -467,7 +476,7 @@ impl Choice {
     }
 
     /// What the table's rays weigh, when they are not all one: a reuse connection's shadow ray,
-    /// an EARS candidate's ray.
+    /// an EARS candidate's ray, a guided candidate's ray.
     fn weights(&self) -> String {
         let mut s = String::new();
         if self.cost == Cost::Rays {
@@ -476,6 +485,9 @@ impl Choice {
             }
             if (self.rows.iter()).any(|r| r.candidate.roulette == Roulette::Ears) {
                 s += &format!("; an EARS ray counts {EARS_RAY_COST}");
+            }
+            if (self.rows.iter()).any(|r| r.candidate.strategy.directions == Directions::Guided) {
+                s += &format!("; a guided ray counts {GUIDED_RAY_COST}");
             }
         }
         s
@@ -503,6 +515,9 @@ impl Choice {
         )
     }
 }
+
+mod pilot;
+use pilot::{shared_denominator, Pilots};
 
 #[cfg(test)]
 mod tests;

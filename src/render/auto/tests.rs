@@ -1,5 +1,6 @@
 //! Unit tests of `--strategy auto`'s rule, names and pilot sizes.
 
+use super::pilot::Pilot;
 use super::*;
 
 fn row(candidate: Candidate, rel_mse: f64, se: f64, cost: f64) -> PilotRow {
@@ -101,4 +102,59 @@ fn pilots_take_a_sixteenth_in_whole_rounds_of_replicates() {
     assert_eq!(pilot_spp(1000), 60);
     assert_ne!(pilot_seed(0), pilot_seed(1));
     assert_ne!(pilot_seed(0), 0);
+}
+
+/// A guided candidate's guide trains on a sixteenth of the render's budget: of its time limit,
+/// and of its samples, as samples per pixel of the strip (a quarter of the image: 4× as many).
+#[test]
+fn a_guided_candidates_guide_trains_on_a_sixteenth_of_the_budget() {
+    let b = guide_budget(1024, 0.25, Some(Duration::from_secs(8)));
+    assert_eq!(b.spp, 256);
+    assert_eq!(b.time, Some(Duration::from_millis(500)));
+    assert_eq!(guide_budget(1024, 1.0, None).spp, 64);
+    assert_eq!(guide_budget(4, 0.25, None).spp, 1);
+}
+
+fn pilot(mean: f32, variance: f32, pixels: usize, cost: f64) -> Pilot {
+    Pilot {
+        candidate: Candidate::from(Strategy::default()),
+        spp: 4,
+        cost,
+        seconds: 0.1,
+        mean: vec![glam::Vec3::splat(mean); pixels],
+        variance: vec![glam::Vec3::splat(variance); pixels],
+    }
+}
+
+/// Every pilot's relMSE is measured against one denominator, from the mean of all the pilots'
+/// images: two pilots of a flat 8×8 image, one reading 1 and the other 3 (variances 1e-6 and
+/// 4e-6; the pooled mean is 2 everywhere, so the blend and the box agree: `r² = 4`), give
+/// relMSEs `v/(r² + 0.01)` with the same `r² ≈ 4`, and efficiencies `1/(relMSE × cost)`. A pilot
+/// that met a rare bright path in one pixel of a hundred (mean 1 there with variance 0.06,
+/// nothing elsewhere, where the truth is 0.01, which the other pilot reads precisely) is weighed
+/// there by the pooled mean 0.505 with the pooled variance `(0.06 + 1e-8)/4 = 0.0150` (blend
+/// `λ = 0.515` with the box average 0.061: `r² = 0.133`), a relMSE of `0.06/0.143/100 = 4.191e-3`;
+/// against its own image (a render's estimate: mean 1, `λ = 0.51`, box 0.111, `r² = 0.516`) it
+/// reads `1.14e-3`, 3.7× lower.
+#[test]
+fn pilots_are_measured_against_one_denominator() {
+    let rows = shared_denominator(
+        8,
+        vec![pilot(1.0, 1e-6, 64, 2.0), pilot(3.0, 4e-6, 64, 5.0)],
+    );
+    let r2 = 4.0 + 0.01;
+    for (r, (v, cost)) in rows.iter().zip([(1e-6, 2.0), (4e-6, 5.0)]) {
+        assert!((r.rel_mse / (v / r2) - 1.0).abs() < 1e-4, "{}", r.rel_mse);
+        assert!((r.efficiency * r.rel_mse * cost - 1.0).abs() < 1e-9);
+        assert!(r.rel_mse_se < 1e-3 * r.rel_mse, "a flat image: no spread");
+    }
+    // the rare bright path, in pixel 45 of a 10×10 image (away from the edges)
+    let mut rare = pilot(0.0, 0.0, 100, 1.0);
+    (rare.mean[45], rare.variance[45]) = (glam::Vec3::ONE, glam::Vec3::splat(0.06));
+    let (mean, variance) = (rare.mean.clone(), rare.variance.clone());
+    let rows = shared_denominator(10, vec![rare, pilot(0.01, 1e-8, 100, 1.0)]);
+    let own = crate::estimate::image_error(10, &mean, &variance).1;
+    assert!((own / 1.140e-3 - 1.0).abs() < 1e-3, "{own}");
+    let shared = rows[0].rel_mse;
+    assert!((shared / 4.191e-3 - 1.0).abs() < 1e-3, "{shared}");
 }

@@ -1,0 +1,184 @@
+//! The pilots of `--strategy auto` (the module doc above says what they measure): each
+//! candidate rendered on the pilots' strip of tiles with the pilots' seed and replicates, a
+//! guided candidate's guide learned first, and the rows measured against one denominator.
+
+use super::*;
+use crate::estimate::{rel_mse_against, squared_reference};
+use crate::render::{learn_guide_with, render_passes, NoProgress, Rendered, TILE};
+
+/// The pilots of one render: what every candidate's pilot shares, and the guides the guided
+/// candidates learned.
+pub(super) struct Pilots<'a> {
+    scene: &'a Scene,
+    settings: &'a RenderSettings,
+    plan: &'a PassPlan,
+    candidates: &'a [Candidate],
+    cost: Cost,
+    strip: Option<Arc<TileStrip>>,
+    /// The pilots' image: the strip's width (or the image's).
+    pub(super) width: u32,
+    height: u32,
+    /// The pilots' share of the image's pixels.
+    pub(super) share: f64,
+    /// The tiles the pilots render, and the image's (partial ones included).
+    pub(super) tiles: (u32, u32),
+    /// Each guided candidate's guide, learned on the strip before its first pilot (see
+    /// [`GUIDE_SHARE`]), kept for the render if it is chosen.
+    pub(super) guides: Vec<Option<Arc<LearnedGuide>>>,
+}
+
+impl<'a> Pilots<'a> {
+    /// The pilots of a render of `settings` under `plan` among `candidates`, costs counted as
+    /// `cost`, on the strip [`pilot_strip`] gives.
+    pub(super) fn new(
+        scene: &'a Scene,
+        settings: &'a RenderSettings,
+        plan: &'a PassPlan,
+        candidates: &'a [Candidate],
+        cost: Cost,
+    ) -> Self {
+        let strip = pilot_strip(settings.width, settings.height).map(Arc::new);
+        let (width, height) = strip
+            .as_ref()
+            .map_or((settings.width, settings.height), |s| s.size());
+        let image_tiles = settings.width.div_ceil(TILE) * settings.height.div_ceil(TILE);
+        let tiles = strip
+            .as_ref()
+            .map_or(image_tiles, |s| s.origins.len() as u32);
+        let share =
+            (width as f64 * height as f64) / (settings.width as f64 * settings.height as f64);
+        Pilots {
+            scene,
+            settings,
+            plan,
+            candidates,
+            cost,
+            strip,
+            width,
+            height,
+            share,
+            tiles: (tiles, image_tiles),
+            guides: vec![None; candidates.len()],
+        }
+    }
+
+    /// The pilot of candidate `k` at `spp` samples per pixel (all replicates).
+    pub(super) fn run(&mut self, k: usize, spp: u32) -> Result<Pilot> {
+        let s = RenderSettings {
+            seed: pilot_seed(self.settings.seed),
+            first_sample: 0,
+            spp,
+            replicates: PILOT_REPLICATES,
+            width: self.width,
+            height: self.height,
+            ..self.candidates[k].settings(self.settings)
+        };
+        let mut p = PassPlan {
+            stop: self.plan.stop.clone(),
+            strip: self.strip.clone(),
+            ..PassPlan::default()
+        };
+        if s.strategy.directions == Directions::Guided {
+            p.guide = Some(self.guide(k, &s, &p)?);
+        }
+        let r = render_passes(self.scene, &s, &p, &NoProgress)?;
+        Ok(pilot_of(self.candidates[k], r, self.cost))
+    }
+
+    /// Guided candidate `k`'s guide, learned once on the strip with the render's seed (the
+    /// training's own seeds are mixed from it) within [`guide_budget`]; `s` and `p` are its
+    /// pilot's settings and plan.
+    fn guide(&mut self, k: usize, s: &RenderSettings, p: &PassPlan) -> Result<Arc<LearnedGuide>> {
+        if let Some(g) = &self.guides[k] {
+            return Ok(g.clone());
+        }
+        let learner = RenderSettings {
+            seed: self.settings.seed,
+            ..s.clone()
+        };
+        let budget = guide_budget(self.settings.spp, self.share, self.plan.time_limit);
+        let (tree, stats) = learn_guide_with(self.scene, &learner, p, budget)?;
+        let stats = stats.guide.unwrap_or_default();
+        let g = Arc::new(LearnedGuide { tree, stats });
+        self.guides[k] = Some(g.clone());
+        Ok(g)
+    }
+}
+
+/// A candidate's pilot: its samples per pixel, cost and wall seconds, and its image's mean and
+/// estimated variance per pixel.
+pub(super) struct Pilot {
+    pub(super) candidate: Candidate,
+    pub(super) spp: u32,
+    pub(super) cost: f64,
+    pub(super) seconds: f64,
+    pub(super) mean: Vec<glam::Vec3>,
+    pub(super) variance: Vec<glam::Vec3>,
+}
+
+/// The pilots' rows, every relMSE measured against one denominator ([`rel_mse_against`]): the
+/// squared reference ([`squared_reference`]) of the mean of all the pilots' images (each an
+/// unbiased image of the same tiles), so every candidate weighs the pixels alike, and a pixel
+/// where one pilot met a rare bright path does not lower that pilot's relMSE by its own bright
+/// mean. The mean's variance is taken as the pilots' `Σv/k²`, as if their errors were
+/// independent; they share their random numbers, so it is somewhat larger (up to `(Σ√v/k)²`),
+/// and the blend of [`squared_reference`] leans on the pooled mean a little more than it would
+/// with the true variance.
+pub(super) fn shared_denominator(width: u32, pilots: Vec<Pilot>) -> Vec<PilotRow> {
+    let k = pilots.len().max(1) as f32;
+    let n = pilots.first().map_or(0, |p| p.mean.len());
+    let (mut mean, mut var) = (vec![glam::Vec3::ZERO; n], vec![glam::Vec3::ZERO; n]);
+    for p in &pilots {
+        for i in 0..n {
+            mean[i] += p.mean[i] / k;
+            var[i] += p.variance[i] / (k * k);
+        }
+    }
+    let r2 = squared_reference(width, &mean, &var);
+    pilots
+        .into_iter()
+        .map(|p| {
+            let (rel_mse, rel_mse_se) = rel_mse_against(&r2, &p.variance);
+            PilotRow {
+                candidate: p.candidate,
+                spp: p.spp,
+                rel_mse,
+                rel_mse_se,
+                cost: p.cost,
+                efficiency: 1.0 / (rel_mse * p.cost),
+                seconds: p.seconds,
+            }
+        })
+        .collect()
+}
+
+/// What the pilot `r` of `candidate` measured: its image's mean and estimated variance per
+/// pixel, and its cost counted as `cost` says.
+fn pilot_of(candidate: Candidate, r: Rendered, cost: Cost) -> Pilot {
+    let rays = &r.stats.rays;
+    let seconds = r.stats.elapsed.as_secs_f64();
+    let spent = match cost {
+        Cost::Rays => {
+            let connections = rays.connection as f64;
+            let weighed = (rays.total() as f64 - connections) + CONNECTION_COST * connections;
+            let ears = match candidate.roulette {
+                Roulette::Ears => EARS_RAY_COST,
+                Roulette::Classic => 1.0,
+            };
+            let guided = match candidate.strategy.directions {
+                Directions::Guided => GUIDED_RAY_COST,
+                _ => 1.0,
+            };
+            ears * guided * weighed
+        }
+        Cost::Seconds => seconds,
+    };
+    Pilot {
+        candidate,
+        spp: r.spp,
+        cost: spent,
+        seconds,
+        mean: r.film.mean_image(),
+        variance: r.estimate.variance,
+    }
+}
