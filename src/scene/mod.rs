@@ -424,15 +424,20 @@ fn shading_in_bvh_order(accel: &Accel, mesh: &Mesh) -> Vec<TriShading> {
         .collect()
 }
 
-/// An emitter for each triangle of an emissive material, by its primitive index in BVH order.
+/// An emitter for each triangle of an emissive material, knowing its primitive index in BVH
+/// order, listed in the file's order: the lights' tables and tree, and so the light a sample
+/// chooses, do not depend on how the BVH was built (a better build reordered the lights of the
+/// door and the plates and changed their images).
 fn emitters_of(accel: &Accel, shading: &[TriShading], materials: &[Material]) -> Vec<Emitter> {
-    shading
-        .iter()
-        .enumerate()
-        .filter(|(_, s)| materials[s.material as usize].is_emissive())
-        .map(|(prim, s)| {
-            let emission = materials[s.material as usize].emission;
-            Emitter::triangle(prim as u32, accel.vertices(prim as u32), emission)
+    let mut prims: Vec<u32> = (0..shading.len() as u32)
+        .filter(|&prim| materials[shading[prim as usize].material as usize].is_emissive())
+        .collect();
+    prims.sort_unstable_by_key(|&prim| accel.order[prim as usize]);
+    prims
+        .into_iter()
+        .map(|prim| {
+            let emission = materials[shading[prim as usize].material as usize].emission;
+            Emitter::triangle(prim, accel.vertices(prim), emission)
         })
         .collect()
 }
