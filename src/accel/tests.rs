@@ -155,3 +155,33 @@ fn rays_are_obvhs_rays() {
         }
     }
 }
+
+/// The build keeps each triangle in exactly one leaf: `order` is a permutation of the input
+/// indices (a scene makes one emitter and one shading record per BVH-order triangle, so a
+/// triangle referenced twice, as obvhs's pre-splitting makes them, would emit twice), and each
+/// BVH-order triangle's vertices are its input triangle's. Long thin triangles along the
+/// diagonal of the cloud of small ones, whose boxes are mostly empty, are what pre-splitting
+/// splits (with it on, this scene's BVH held 4454 references to its 4200 triangles).
+#[test]
+fn the_build_keeps_each_triangle_once() {
+    let mut tris = random_triangles(5, 4000, 0.05);
+    for k in 0..200 {
+        let s = k as f32 * 0.01;
+        tris.push([
+            Vec3::new(-1.9, -1.9 + s, -1.9),
+            Vec3::new(1.9, 1.9, 1.9 - s),
+            Vec3::new(1.9, 1.88, 1.9),
+        ]);
+    }
+    let accel = Accel::build(&tris);
+    assert_eq!(accel.len(), tris.len());
+    let mut seen = vec![false; tris.len()];
+    for (prim, &i) in accel.order.iter().enumerate() {
+        assert!(!seen[i as usize], "triangle {i} is in the BVH twice");
+        seen[i as usize] = true;
+        let [a, b, c] = accel.vertices(prim as u32);
+        for (got, want) in [a, b, c].into_iter().zip(tris[i as usize]) {
+            assert!((got - want).length() < 1e-5, "triangle {i}");
+        }
+    }
+}
