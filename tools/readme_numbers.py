@@ -479,6 +479,22 @@ def reuse():
     print("\nGeometric mean of the gain: " + ", ".join(f"K = {k} {geo[k]:.2f}×" for k in ks) + ".")
 
 
+@section("reuse-door")
+def reuse_door():
+    """docs/reuse.md's 60-s door: the default, guided directions, `--reuse 4` and both at the
+    door's own size, relMSE from seed pairs against one shared denominator."""
+    print("`vrpt render scenes/door --spp 1048576 --time-limit 60 --seed S [--directions guided] "
+          "[--reuse 4]`, the door at its own size, seed pairs (1, 2) and (3, 4), configs interleaved, "
+          "relMSE of one render from its pair with one denominator render shared by every config "
+          "(`vrpt diff --pair-denominator`); gain = relMSE(default) / relMSE(config):\n")
+    configs = [("default", []), ("guided", ["--directions", "guided"]), ("reuse 4", ["--reuse", 4]),
+               ("guided + reuse 4", ["--directions", "guided", "--reuse", 4])]
+    r = equal_time_pairs("door", None, None, 60, configs)
+    base = r["default"][0]
+    rows = [[label, g(m), f"{n:.0f}", f"**{base / m:.2f}×**"] for label, (m, n, _) in r.items()]
+    print(table(["config", "relMSE of one render", "spp (median)", "gain"], rows))
+
+
 ROULETTE_SCENES = ["cornell-box", "night-hall", "gap", "door", "glossy-plates", "sun-sky"]
 
 
