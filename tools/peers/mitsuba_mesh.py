@@ -31,8 +31,10 @@ import time
 
 import numpy as np
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path[:0] = [HERE, os.path.dirname(HERE)]
 import mitsuba_race as race  # noqa: E402  (sets Dr.Jit's LLVM path, imports mitsuba)
+from make_big_scene import icosphere  # noqa: E402  (the large-scene tool's subdivided sphere)
 
 mi = race.mi
 
@@ -40,35 +42,10 @@ CENTRE = np.array([0.05, -0.25, 0.35])
 RADIUS = 0.32
 
 
-def icosphere(level):
-    """Vertices (unit) and faces of an icosphere subdivided `level` times."""
-    t = (1.0 + 5.0 ** 0.5) / 2.0
-    v = [(-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0), (0, -1, t), (0, 1, t), (0, -1, -t),
-         (0, 1, -t), (t, 0, -1), (t, 0, 1), (-t, 0, -1), (-t, 0, 1)]
-    verts = [np.array(p, dtype=np.float64) / np.linalg.norm(p) for p in v]
-    faces = [(0, 11, 5), (0, 5, 1), (0, 1, 7), (0, 7, 10), (0, 10, 11), (1, 5, 9), (5, 11, 4),
-             (11, 10, 2), (10, 7, 6), (7, 1, 8), (3, 9, 4), (3, 4, 2), (3, 2, 6), (3, 6, 8),
-             (3, 8, 9), (4, 9, 5), (2, 4, 11), (6, 2, 10), (8, 6, 7), (9, 8, 1)]
-    for _ in range(level):
-        mid, out = {}, []
-
-        def middle(a, b):
-            key = (min(a, b), max(a, b))
-            if key not in mid:
-                m = verts[a] + verts[b]
-                verts.append(m / np.linalg.norm(m))
-                mid[key] = len(verts) - 1
-            return mid[key]
-        for a, b, c in faces:
-            ab, bc, ca = middle(a, b), middle(b, c), middle(c, a)
-            out += [(a, ab, ca), (b, bc, ab), (c, ca, bc), (ab, bc, ca)]
-        faces = out
-    return np.array(verts), np.array(faces, dtype=np.int64)
-
-
 def bumpy_mesh(level):
     """World-space vertices, unit vertex normals and faces of the displaced sphere."""
-    u, f = icosphere(level)
+    verts, faces = icosphere(level)
+    u, f = np.array(verts, dtype=np.float64), np.array(faces, dtype=np.int64)
     bump = 1.0 + 0.08 * (np.sin(9 * u[:, 0]) * np.sin(7 * u[:, 1]) * np.sin(8 * u[:, 2])) \
         + 0.03 * np.sin(23 * u[:, 0] + 17 * u[:, 1])
     p = CENTRE + RADIUS * u * bump[:, None]
