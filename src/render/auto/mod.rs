@@ -382,18 +382,18 @@ pub fn choose(
         None => pilot_spp(settings.spp),
         Some(limit) => {
             // the first candidate's speed, from a pilot of one sample per replicate, and the
-            // spp the image would take at it in the time limit
+            // spp the image would take at it in the time limit. The probe is not the first
+            // candidate's pilot even when the spp comes out the same: it is the first render
+            // of the process on these tiles and pays for the threads, caches and pages it
+            // warms (glass, 4-spp pilots: the probe taken as mis's pilot read its time 1.02×
+            // reuse 4's, which takes 1.79× mis's time at 10 s, and auto chose reuse, z 9.5)
             let probe = pilots.run(0, PILOT_REPLICATES)?;
             let per_spp = probe.seconds / probe.spp as f64 / pilots.share;
             let fits = limit.as_secs_f64() / per_spp.max(1e-12);
-            let spp = pilot_spp((fits as u32).min(settings.spp));
-            if spp == probe.spp {
-                done.push(probe);
-            }
-            spp
+            pilot_spp((fits as u32).min(settings.spp))
         }
     };
-    for k in done.len()..candidates.len() {
+    for k in 0..candidates.len() {
         done.push(pilots.run(k, spp)?);
     }
     let rows = shared_denominator(pilots.width, done);
