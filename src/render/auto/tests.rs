@@ -126,23 +126,25 @@ fn pilot(mean: f32, variance: f32, pixels: usize, cost: f64) -> Pilot {
     }
 }
 
-/// Every pilot's relMSE is measured against one denominator, from the mean of all the pilots'
-/// images: two pilots of a flat 8×8 image, one reading 1 and the other 3 (variances 1e-6 and
-/// 4e-6; the pooled mean is 2 everywhere, so the blend and the box agree: `r² = 4`), give
-/// relMSEs `v/(r² + 0.01)` with the same `r² ≈ 4`, and efficiencies `1/(relMSE × cost)`. A pilot
-/// that met a rare bright path in one pixel of a hundred (mean 1 there with variance 0.06,
-/// nothing elsewhere, where the truth is 0.01, which the other pilot reads precisely) is weighed
-/// there by the pooled mean 0.505 with the pooled variance `(0.06 + 1e-8)/4 = 0.0150` (blend
-/// `λ = 0.515` with the box average 0.061: `r² = 0.133`), a relMSE of `0.06/0.143/100 = 4.191e-3`;
-/// against its own image (a render's estimate: mean 1, `λ = 0.51`, box 0.111, `r² = 0.516`) it
-/// reads `1.14e-3`, 3.7× lower.
+/// Every pilot's relMSE is measured against one denominator, from the pilots' images weighed by
+/// the inverse of their mean variances: two pilots of a flat 8×8 image, one reading 1 and the
+/// other 3 (variances 1e-6 and 4e-6: weights 0.8 and 0.2, a pooled mean of 1.4 everywhere, so
+/// the blend and the box agree: `r² = 1.96`), give relMSEs `v/(r² + 0.01)` with the same `r²`,
+/// and efficiencies `1/(relMSE × cost)`. A pilot that met a rare bright path in one pixel of a
+/// hundred (mean 1 there with variance 0.06, nothing elsewhere, where the truth is 0.01, which the
+/// other pilot reads precisely with variance 1e-8) has a mean variance of `0.06/100 = 6e-4`, so
+/// its weight is `1e-8/6e-4 ≈ 1.7e-5` of the other's: the pooled mean is 0.01 to 1e-5 (its
+/// variance ~1e-8, `λ ≈ 0.998`), `r² ≈ 1.0e-4`, and the rare pilot's relMSE is
+/// `0.06/(1.0e-4 + 0.01)/100 = 5.94e-4 × 100 = 0.0594`, its error against the truth; against its
+/// own image (a render's estimate: mean 1, `λ = 0.51`, box 0.111, `r² = 0.516`) it reads
+/// `1.14e-3`, 52× lower.
 #[test]
 fn pilots_are_measured_against_one_denominator() {
     let rows = shared_denominator(
         8,
         vec![pilot(1.0, 1e-6, 64, 2.0), pilot(3.0, 4e-6, 64, 5.0)],
     );
-    let r2 = 4.0 + 0.01;
+    let r2 = 1.96 + 0.01;
     for (r, (v, cost)) in rows.iter().zip([(1e-6, 2.0), (4e-6, 5.0)]) {
         assert!((r.rel_mse / (v / r2) - 1.0).abs() < 1e-4, "{}", r.rel_mse);
         assert!((r.efficiency * r.rel_mse * cost - 1.0).abs() < 1e-9);
@@ -156,5 +158,9 @@ fn pilots_are_measured_against_one_denominator() {
     let own = crate::estimate::image_error(10, &mean, &variance).1;
     assert!((own / 1.140e-3 - 1.0).abs() < 1e-3, "{own}");
     let shared = rows[0].rel_mse;
-    assert!((shared / 4.191e-3 - 1.0).abs() < 1e-3, "{shared}");
+    let truth = 0.06 / (0.01f64 * 0.01 + 0.01) / 100.0;
+    assert!(
+        (shared / truth - 1.0).abs() < 5e-3,
+        "{shared} against {truth}"
+    );
 }
