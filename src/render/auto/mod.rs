@@ -379,7 +379,6 @@ pub fn choose(
         None => Cost::Rays,
     };
     let mut pilots = Pilots::new(scene, settings, plan, candidates, cost);
-    let mut done = Vec::with_capacity(candidates.len());
     let spp = match plan.time_limit {
         None => pilot_spp(settings.spp),
         Some(limit) => {
@@ -395,9 +394,9 @@ pub fn choose(
             pilot_spp((fits as u32).min(settings.spp))
         }
     };
-    for k in 0..candidates.len() {
-        done.push(pilots.run(k, spp)?);
-    }
+    let done = (0..candidates.len())
+        .map(|k| pilots.run(k, spp))
+        .collect::<Result<Vec<_>>>()?;
     let rows = shared_denominator(pilots.width, done);
     let (index, z) = decide(&rows);
     Ok(Choice {
