@@ -528,27 +528,32 @@ def auto():
     renders (`--time-limit 10`, pilots included), each shipped scene at its own size, relMSE from
     seed pairs."""
     print("`vrpt render scenes/SCENE --spp 1048576 --time-limit 10 --seed S` with `--strategy mis`, "
-          "`--strategy mis --reuse 4`, `--directions guided` or `--strategy auto` (its default candidates "
-          "mis and mis+reuse4), seed pairs (1, 2) and (3, 4), configs interleaved; relMSE of one render from "
-          "its pair, `mean((a − b)²/(2(c² + 0.01)))`, c one more render shared by every config "
-          "(`vrpt diff --pair-denominator`); ratio above 1 means auto wins:\n")
+          "`--strategy mis --reuse 4`, `--directions guided`, `--directions guided --reuse 4` or "
+          "`--strategy auto` (its default candidates mis, mis+reuse4 and stratified+guided+mis+reuse4, "
+          "the last piloted only where reuse wins), seed pairs (1, 2), (3, 4) and (5, 6), configs "
+          "interleaved; relMSE of one render from its pair, `mean((a − b)²/(2(c² + 0.01)))`, c one "
+          "more render shared by every config (`vrpt diff --pair-denominator`); ratio above 1 means "
+          "auto wins:\n")
     configs = [("mis", ["--strategy", "mis"]), ("reuse", ["--strategy", "mis", "--reuse", 4]),
-               ("guided", ["--directions", "guided"]), ("auto", ["--strategy", "auto"])]
+               ("guided", ["--directions", "guided"]),
+               ("guided+reuse", ["--directions", "guided", "--reuse", 4]),
+               ("auto", ["--strategy", "auto"])]
     rows, vs_mis, vs_best = [], [], []
     for scene in AUTO_SCENES:
         log = []
-        r = equal_time_pairs(scene, None, None, 10, configs, log=log)
+        r = equal_time_pairs(scene, None, None, 10, configs, pairs=((1, 2), (3, 4), (5, 6)), log=log)
         chosen = [re.search(r"^  (\S+)\s.*<- chosen", e, re.M).group(1) for l, e in log if l == "auto"]
-        (mm, _, _), (mr, _, _), (mg, _, _), (ma, sa, _) = (r[k] for k in ("mis", "reuse", "guided", "auto"))
-        best = min(mm, mr, mg)
+        mm, mr, mg, mgr = (r[k][0] for k in ("mis", "reuse", "guided", "guided+reuse"))
+        ma, sa, _ = r["auto"]
+        best = min(mm, mr, mg, mgr)
         vs_mis.append(mm / ma)
         vs_best.append(best / ma)
         picks = ", ".join(f"{chosen.count(c)}× {c}" for c in sorted(set(chosen)))
-        rows.append([scene, g(mm), g(mr), g(mg), f"{g(ma)} ({sa} spp)", picks, f"{mm / ma:.2f}×",
+        rows.append([scene, g(mm), g(mr), g(mg), g(mgr), f"{g(ma)} ({sa} spp)", picks, f"{mm / ma:.2f}×",
                      f"{best / ma:.2f}×"])
         print(f"  {scene}: {rows[-1]}", file=sys.stderr, flush=True)
-    print(table(["scene", "mis relMSE", "mis+reuse4 relMSE", "guided relMSE", "auto relMSE", "auto chose",
-                 "mis / auto", "best / auto"], rows))
+    print(table(["scene", "mis relMSE", "mis+reuse4 relMSE", "guided relMSE", "guided+reuse4 relMSE",
+                 "auto relMSE", "auto chose", "mis / auto", "best / auto"], rows))
     geo = math.exp(statistics.mean(math.log(x) for x in vs_mis))
     print(f"\nGeometric mean of mis / auto: {geo:.2f}×; worst best / auto: {min(vs_best):.2f}× "
           f"({AUTO_SCENES[vs_best.index(min(vs_best))]}).")

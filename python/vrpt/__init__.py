@@ -271,7 +271,8 @@ def render(
     does); ``None`` takes the scene's ``[render]`` default, then vrpt's. ``strategy`` is a preset
     (``independent``, ``stratified``, ``importance``, ``combined``, ``nee``, ``mis``; default:
     vrpt's default) or ``auto`` (a pilot chooses among ``auto_candidates``, strategies with
-    ``+reuseK`` for path reuse or ``+ears`` for EARS such as ``"mis,mis+reuse4"``, the default;
+    ``+reuseK`` for path reuse or ``+ears`` for EARS such as ``"mis,mis+reuse4"``; the default
+    ``"mis,mis+reuse4,stratified+guided+mis+reuse4"``, the guided one piloted only where reuse wins;
     what it measured is in
     ``summary`` and ``metadata["auto"]``), and ``sampler``, ``directions`` (``guided`` for path
     guiding), ``lights``, ``light_points``, ``light_choice`` set one part of it. ``roulette`` is

@@ -64,7 +64,8 @@ pub struct RenderRequest {
     /// With --strategy auto: the candidates its pilot chooses from, comma-separated strategies,
     /// each with +reuseK for path reuse in K×K blocks (`mis+reuse3`) or +ears for
     /// efficiency-aware roulette and splitting (`mis+ears`); the first is kept unless another is
-    /// more efficient beyond the pilot's noise [default: mis,mis+reuse4]
+    /// more efficient beyond the pilot's noise; a guided candidate is piloted only where an
+    /// unguided one beat the first [default: mis,mis+reuse4,stratified+guided+mis+reuse4]
     #[arg(long, value_name = "CANDIDATES", value_parser = Candidates::parse)]
     pub auto_candidates: Option<Candidates>,
     #[command(flatten)]

@@ -94,6 +94,48 @@ fn auto_under_a_time_limit_chooses_by_wall_time() {
     }
 }
 
+/// A guided candidate is piloted (its guide trained) only where an unguided candidate beat the
+/// first: with `mis` first, `independent` never does (MIS is 5–6× as efficient by the pilots,
+/// above), so the guided candidate is not piloted, the table and the metadata say so, and mis
+/// renders; with `independent` first, mis beats it (z 7–10), so the guided candidate is piloted
+/// too, after the unguided ones. The default candidates are mis, path reuse, and both with
+/// guided directions, the guided one last.
+#[test]
+fn auto_pilots_a_guided_candidate_only_where_an_unguided_one_won() {
+    let size = ["--width", "48", "--height", "36", "--spp", "64"];
+    let guided = "stratified+guided+mis";
+    for base in [1u64, 2] {
+        let seed = common::seed(40 + base).to_string();
+        let args = ["--seed", &seed, "--strategy", "auto", "--auto-candidates"];
+        let kept = render(&[&size[..], &args, &[&format!("mis,independent,{guided}")]].concat());
+        let choice = kept.auto.as_ref().expect("the pilots' choice");
+        assert_eq!(choice.candidate.to_string(), "mis", "{}", choice.table());
+        assert_eq!(choice.rows.len(), 2, "{}", choice.table());
+        assert_eq!(choice.unpiloted.len(), 1);
+        assert_eq!(choice.unpiloted[0].to_string(), guided);
+        assert!(choice.guide.is_none());
+        assert!(choice.table().contains(&format!("{guided}: not piloted")));
+        let record = kept.meta.auto.as_deref().unwrap();
+        assert!(
+            record.contains(&format!("(not piloted: {guided})")),
+            "{record}"
+        );
+        let switched =
+            render(&[&size[..], &args, &[&format!("independent,mis,{guided}")]].concat());
+        let choice = switched.auto.as_ref().expect("the pilots' choice");
+        let names: Vec<String> = (choice.rows.iter())
+            .map(|r| r.candidate.to_string())
+            .collect();
+        assert_eq!(names, ["independent", "mis", guided], "{}", choice.table());
+        assert!(choice.unpiloted.is_empty());
+        assert_ne!(choice.candidate.to_string(), "independent");
+    }
+    let d: Vec<String> = (vrpt::render::auto::default_candidates().iter())
+        .map(|c| c.to_string())
+        .collect();
+    assert_eq!(d, ["mis", "mis+reuse4", "stratified+guided+mis+reuse4"]);
+}
+
 /// Path reuse as a candidate: whichever the pilots choose, the image is that candidate's own
 /// render (`--strategy mis --reuse 4` for `mis+reuse4`, bit for bit), and the metadata says
 /// which reuse rendered it. With reuse first it stays: on the Cornell box it is the more

@@ -60,11 +60,22 @@
 //! thrown away, and the pilot measured the guide the image is rendered with. Its image is then
 //! not `--directions guided`'s (whose guide trains on the whole image), but unbiased for the
 //! same reason: the guide and the choice come from samples independent of the image's.
-//! Guided directions are still not among the default candidates: their pilots see the light
-//! that comes by rare paths no better than the others' (on the gap, door-dark and the glass
-//! scene at 10 s the guided pilot read 0.35–1.16× the efficiency of mis, where guided renders
-//! win 1.5–4.2× over mis), and the guide's training would cost every render a sixteenth of its
-//! budget. Path reuse learns nothing,
+//!
+//! Guided candidates (but a guided first one) are piloted only where an unguided candidate
+//! other than the first beat it beyond the noise, or where the list names no unguided one
+//! but the first: the unguided candidates are piloted first, and a guided one's guide is
+//! trained and piloted only where they switched. The default candidates ([`default_candidates`])
+//! add guided directions to path reuse that way: where reuse beats mis the light comes by
+//! indirect paths, which is where a guide learns something, and on the rooms lit through a door
+//! at 10 s the guided and reusing candidate was chosen in every render and gained 6.8–7.8× over
+//! mis where reuse alone gains 3.5–4.3×; where reuse does not win (direct light, glossy
+//! reflections) a guided pilot read no better and its training cost those renders 8–19% of
+//! their samples (the glossy plates: 229 spp at 10 s against mis's 276). The rule is fixed before
+//! any pilot renders, and the choice is still made from the pilots alone. A guided candidate's
+//! pilot does not see the light that comes by rare paths better than the others' (on the gap,
+//! door-dark and the glass scene at 10 s the guided pilot without reuse read 0.35–1.16× the
+//! efficiency of mis, where guided renders win 1.5–4.2× over mis), so guided directions alone
+//! are not a default candidate. Path reuse learns nothing,
 //! so a pilot sees what the render will get; EARS learns its factors from its pilot's own
 //! training, shorter than a render's, and is not a default candidate either (where it wins,
 //! `mis+reuse4` wins more: `docs/roulette.md`).
@@ -231,16 +242,27 @@ impl Candidates {
 pub const AUTO_REUSE: u32 = 4;
 
 /// The candidates when none are named: today's default (stratified points, Phong directions,
-/// MIS), and the same with path reuse in blocks of [`AUTO_REUSE`]². Not guided directions: their
-/// pilots do not see what guiding gains where it wins, and their training costs (the module
-/// doc).
+/// MIS), the same with path reuse in blocks of [`AUTO_REUSE`]², and that with guided directions
+/// too, which is piloted (its guide trained first) only where path reuse beat mis in its pilot
+/// (the module doc): on the rooms lit through a door or a slit, guiding and reuse together gain
+/// 2× over reuse alone at 10 s, and where reuse does not win neither does the guide, whose
+/// training would cost those renders a sixteenth of their time (`docs/performance.md`).
 pub fn default_candidates() -> Vec<Candidate> {
     let mis = Strategy::default();
+    let reuse = Candidate {
+        reuse: AUTO_REUSE,
+        ..Candidate::from(mis)
+    };
+    let guided = Strategy {
+        directions: Directions::Guided,
+        ..mis
+    };
     vec![
         Candidate::from(mis),
+        reuse,
         Candidate {
-            reuse: AUTO_REUSE,
-            ..Candidate::from(mis)
+            strategy: guided,
+            ..reuse
         },
     ]
 }
@@ -282,10 +304,14 @@ pub struct PilotRow {
 pub struct Choice {
     /// The candidate chosen.
     pub candidate: Candidate,
-    /// Its index among the candidates.
+    /// Its row.
     pub index: usize,
-    /// Every candidate's pilot, in the order given.
+    /// The candidates' pilots: the unguided candidates' in the order given, then the guided
+    /// ones' (but a guided first candidate's, which comes first) when they were piloted.
     pub rows: Vec<PilotRow>,
+    /// The guided candidates not piloted, since no unguided candidate beat the first (the
+    /// module doc).
+    pub unpiloted: Vec<Candidate>,
     /// What the costs count.
     pub cost: Cost,
     /// `z` of the most efficient candidate against the first (0 when it is the first).
@@ -394,20 +420,38 @@ pub fn choose(
             pilot_spp((fits as u32).min(settings.spp))
         }
     };
-    let done = (0..candidates.len())
-        .map(|k| pilots.run(k, spp))
+    // the unguided candidates first; the guided ones (but a guided first) only where one of
+    // those beat the first beyond the noise, or where no unguided one but the first is listed
+    // (the module doc)
+    let n = candidates.len();
+    let guided = |k: usize| k > 0 && candidates[k].strategy.directions == Directions::Guided;
+    let staged = (1..n).any(|k| !guided(k)) && (1..n).any(guided);
+    let mut ks: Vec<usize> = (0..n).filter(|&k| !staged || !guided(k)).collect();
+    let mut done = ks
+        .iter()
+        .map(|&k| pilots.run(k, spp))
         .collect::<Result<Vec<_>>>()?;
-    let rows = shared_denominator(pilots.width, done);
+    if staged && decide(&shared_denominator(pilots.width, &done)).0 != 0 {
+        for k in (1..n).filter(|&k| guided(k)) {
+            done.push(pilots.run(k, spp)?);
+            ks.push(k);
+        }
+    }
+    let rows = shared_denominator(pilots.width, &done);
     let (index, z) = decide(&rows);
     Ok(Choice {
-        candidate: candidates[index],
+        candidate: rows[index].candidate,
         index,
         rows,
+        unpiloted: (0..n)
+            .filter(|k| !ks.contains(k))
+            .map(|k| candidates[k])
+            .collect(),
         cost,
         z,
         elapsed: start.elapsed(),
         tiles: pilots.tiles,
-        guide: pilots.guides.swap_remove(index),
+        guide: pilots.guides[ks[index]].take(),
     })
 }
 
@@ -468,12 +512,29 @@ impl Choice {
                 r.efficiency / e0,
             );
         }
+        let first = self
+            .rows
+            .first()
+            .map_or(String::new(), |r| r.candidate.to_string());
+        if !self.unpiloted.is_empty() {
+            s += &format!(
+                "  {}: not piloted (guided, and no unguided candidate beat {first})\n",
+                self.unpiloted_names()
+            );
+        }
         s + &format!(
-            "  efficiency relative to {}; the best against it: z = {:.1} (switch above {SWITCH_Z}){}\n",
-            self.rows.first().map_or(String::new(), |r| r.candidate.to_string()),
+            "  efficiency relative to {first}; the best against it: z = {:.1} (switch above {SWITCH_Z}){}\n",
             self.z,
             self.weights()
         )
+    }
+
+    /// The guided candidates not piloted, comma-separated.
+    fn unpiloted_names(&self) -> String {
+        (self.unpiloted.iter())
+            .map(|c| c.to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
     }
 
     /// What the table's rays weigh, when they are not all one: a reuse connection's shadow ray,
@@ -501,8 +562,12 @@ impl Choice {
         let rows: Vec<String> = (self.rows.iter())
             .map(|r| format!("{} {:.3}", r.candidate, r.efficiency / e0))
             .collect();
+        let unpiloted = match self.unpiloted.is_empty() {
+            true => String::new(),
+            false => format!(" (not piloted: {})", self.unpiloted_names()),
+        };
         format!(
-            "chose {}; efficiency {}; z {:.2}; pilots {} spp on {} of {} tiles, cost {}",
+            "chose {}; efficiency {}{unpiloted}; z {:.2}; pilots {} spp on {} of {} tiles, cost {}",
             self.candidate,
             rows.join(", "),
             self.z,

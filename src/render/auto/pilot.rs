@@ -133,7 +133,7 @@ pub(super) struct Pilot {
 /// 7.0–7.3 and 4.2–5.0 (textured at 20 spp per replicate 1.53–1.56 either way; glass 1.85 and
 /// 1.95 against 1.42–1.47: it reads path reuse too well there either way). The weights are at
 /// least `1e-30` apart from zero, so a pilot with no variance at all does not divide by zero.
-pub(super) fn shared_denominator(width: u32, pilots: Vec<Pilot>) -> Vec<PilotRow> {
+pub(super) fn shared_denominator(width: u32, pilots: &[Pilot]) -> Vec<PilotRow> {
     let n = pilots.first().map_or(0, |p| p.mean.len());
     let weights: Vec<f64> = (pilots.iter())
         .map(|p| {
@@ -155,7 +155,7 @@ pub(super) fn shared_denominator(width: u32, pilots: Vec<Pilot>) -> Vec<PilotRow
     }
     let r2 = squared_reference(width, &mean, &var);
     pilots
-        .into_iter()
+        .iter()
         .map(|p| {
             let (rel_mse, rel_mse_se) = rel_mse_against(&r2, &p.variance);
             PilotRow {

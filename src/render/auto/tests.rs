@@ -90,7 +90,15 @@ fn candidates_are_named_as_parsed() {
             .contains("does not combine"));
     }
     let d = default_candidates();
-    assert_eq!((d[0].reuse, d[1].reuse), (1, AUTO_REUSE));
+    assert_eq!(
+        (d[0].reuse, d[1].reuse, d[2].reuse),
+        (1, AUTO_REUSE, AUTO_REUSE)
+    );
+    let guided = |c: &Candidate| c.strategy.directions == Directions::Guided;
+    assert_eq!(
+        d.iter().map(guided).collect::<Vec<_>>(),
+        [false, false, true]
+    );
     assert!(d.iter().all(|c| c.roulette == Roulette::Classic));
 }
 
@@ -140,10 +148,7 @@ fn pilot(mean: f32, variance: f32, pixels: usize, cost: f64) -> Pilot {
 /// `1.14e-3`, 52× lower.
 #[test]
 fn pilots_are_measured_against_one_denominator() {
-    let rows = shared_denominator(
-        8,
-        vec![pilot(1.0, 1e-6, 64, 2.0), pilot(3.0, 4e-6, 64, 5.0)],
-    );
+    let rows = shared_denominator(8, &[pilot(1.0, 1e-6, 64, 2.0), pilot(3.0, 4e-6, 64, 5.0)]);
     let r2 = 1.96 + 0.01;
     for (r, (v, cost)) in rows.iter().zip([(1e-6, 2.0), (4e-6, 5.0)]) {
         assert!((r.rel_mse / (v / r2) - 1.0).abs() < 1e-4, "{}", r.rel_mse);
@@ -154,7 +159,7 @@ fn pilots_are_measured_against_one_denominator() {
     let mut rare = pilot(0.0, 0.0, 100, 1.0);
     (rare.mean[45], rare.variance[45]) = (glam::Vec3::ONE, glam::Vec3::splat(0.06));
     let (mean, variance) = (rare.mean.clone(), rare.variance.clone());
-    let rows = shared_denominator(10, vec![rare, pilot(0.01, 1e-8, 100, 1.0)]);
+    let rows = shared_denominator(10, &[rare, pilot(0.01, 1e-8, 100, 1.0)]);
     let own = crate::estimate::image_error(10, &mean, &variance).1;
     assert!((own / 1.140e-3 - 1.0).abs() < 1e-3, "{own}");
     let shared = rows[0].rel_mse;
