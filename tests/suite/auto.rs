@@ -328,7 +328,7 @@ fn auto_is_an_entry_of_experiments() {
 /// [`PassPlan::guide`]), not `--directions guided`'s own (whose guide trains on the whole image
 /// with the render's budget), and the same on 1 and 2 threads. The guide trained within
 /// [`GUIDE_SHARE`] of the render's samples per pixel of the strip (128×96: a quarter of the
-/// tiles, so `256 / 16 · 4 = 64` spp: iterations 1 + 2 + … + 32 = 63), and the render reports
+/// tiles, so `256 / 8 · 4 = 128` spp: iterations 1 + 2 + … + 64 = 127), and the render reports
 /// that training as its own. A candidate list of one keeps it whatever the pilots read; the
 /// table names the weight of a guided ray ([`GUIDED_RAY_COST`]).
 #[test]
@@ -345,10 +345,10 @@ fn auto_hands_its_guided_pilots_guide_to_the_render() {
     let learned = choice.guide.clone().expect("the guided pilot's guide");
     assert_eq!(
         (learned.stats.iterations, learned.stats.training_spp),
-        (6, 63)
+        (7, 127)
     );
     let g = auto.stats.guide.expect("the render's guide stats");
-    assert_eq!((g.iterations, g.training_spp), (6, 63));
+    assert_eq!((g.iterations, g.training_spp), (7, 127));
     assert!(choice
         .table()
         .contains(&format!("a guided ray counts {GUIDED_RAY_COST}")));

@@ -53,7 +53,7 @@
 //! guide, below), so each choice is unbiased and so is their mixture.
 //!
 //! A guided candidate (`stratified+guided+mis`) first learns its guide on the pilots' strip,
-//! with its training's own seeds and a budget of [`GUIDE_SHARE`] of the render's (half as many
+//! with its training's own seeds and a budget of [`GUIDE_SHARE`] of the render's (as many
 //! samples per pixel of the strip as a guided render's own training takes per pixel of the
 //! image), and its pilot samples with that guide; if it is chosen, the render samples with
 //! the same guide and does not train ([`PassPlan::guide`]): nothing the pilot learned is
@@ -246,7 +246,7 @@ pub const AUTO_REUSE: u32 = 4;
 /// too, which is piloted (its guide trained first) only where path reuse beat mis in its pilot
 /// (the module doc): on the rooms lit through a door or a slit, guiding and reuse together gain
 /// 2× over reuse alone at 10 s, and where reuse does not win neither does the guide, whose
-/// training would cost those renders a sixteenth of their time (`docs/performance.md`).
+/// training would cost those renders an eighth of their time (`docs/performance.md`).
 pub fn default_candidates() -> Vec<Candidate> {
     let mis = Strategy::default();
     let reuse = Candidate {
@@ -329,11 +329,14 @@ pub struct Choice {
 /// training iterations ([`crate::guiding`]) on the pilots' strip take at most this share of the
 /// time limit, and of the render's samples (`spp × GUIDE_SHARE / strip share` samples per pixel
 /// of the strip, so about this share of the render's cost). On a strip of a quarter of the
-/// image that is `spp/4` samples per pixel of it, half of the `spp/2` a guided render's own
-/// training takes per pixel of the image (under a time limit `T/16` on a quarter of the
-/// pixels, about the `T/4` of a whole image, against its `T/3`); the render chosen samples with
-/// this guide and trains no more.
-pub const GUIDE_SHARE: f64 = 1.0 / 16.0;
+/// image that is `spp/2` samples per pixel of it, the `spp/2` a guided render's own training
+/// takes per pixel of the image (under a time limit `T/8` on a quarter of the pixels, about the
+/// `T/2` of a whole image, against its `T/3`); the render chosen samples with this guide and
+/// trains no more. Measured at 10 s (auto with the default candidates, three seed pairs, the
+/// three shares interleaved), relMSE at 1/16, 1/8 and 1/4: door-dark 5.60e-3, 4.14e-3, 3.89e-3;
+/// the gap 0.231, 0.216, 0.244; the door 0.0400, 0.0387, 0.0316; the Cornell box (where guiding
+/// adds nothing) 1.228e-3, 1.227e-3, 1.399e-3. 1/8 gains or ties on all four; 1/4 loses on two.
+pub const GUIDE_SHARE: f64 = 1.0 / 8.0;
 
 /// The training budget of a guided candidate's guide for a render of `spp` under `time_limit`,
 /// trained on a strip of `share` of the image's pixels ([`GUIDE_SHARE`]).

@@ -112,15 +112,15 @@ fn pilots_take_a_sixteenth_in_whole_rounds_of_replicates() {
     assert_ne!(pilot_seed(0), 0);
 }
 
-/// A guided candidate's guide trains on a sixteenth of the render's budget: of its time limit,
+/// A guided candidate's guide trains on an eighth of the render's budget: of its time limit,
 /// and of its samples, as samples per pixel of the strip (a quarter of the image: 4× as many).
 #[test]
-fn a_guided_candidates_guide_trains_on_a_sixteenth_of_the_budget() {
+fn a_guided_candidates_guide_trains_on_an_eighth_of_the_budget() {
     let b = guide_budget(1024, 0.25, Some(Duration::from_secs(8)));
-    assert_eq!(b.spp, 256);
-    assert_eq!(b.time, Some(Duration::from_millis(500)));
-    assert_eq!(guide_budget(1024, 1.0, None).spp, 64);
-    assert_eq!(guide_budget(4, 0.25, None).spp, 1);
+    assert_eq!(b.spp, 512);
+    assert_eq!(b.time, Some(Duration::from_secs(1)));
+    assert_eq!(guide_budget(1024, 1.0, None).spp, 128);
+    assert_eq!(guide_budget(4, 0.25, None).spp, 2);
 }
 
 fn pilot(mean: f32, variance: f32, pixels: usize, cost: f64) -> Pilot {
