@@ -42,6 +42,8 @@ def test_the_readme_line_renders_the_cornell_box_at_its_size():
         (["--strategy", "nee", "--adaptive"], dict(strategy="nee", adaptive=True)),
         (["--sampler", "sobol", "--max-depth", "3"], dict(sampler="sobol", max_depth=3)),
         (["--roulette", "ears"], dict(roulette="ears")),
+        (["--directions", "guided"], dict(directions="guided")),
+        (["--directions", "guided", "--training-images", "discard"], dict(directions="guided", training_images="discard")),
     ],
 )
 def test_arrays_and_metadata_match_the_cli_exr_bit_for_bit(tmp_path, flags, kwargs):

@@ -261,6 +261,7 @@ def render(
     target_error: Optional[float] = None,
     reuse: Optional[int] = None,
     roulette: Optional[str] = None,
+    training_images: Optional[str] = None,
     threads: Optional[int] = None,
     strict: bool = False,
     stats: bool = False,
@@ -277,6 +278,8 @@ def render(
     ``summary`` and ``metadata["auto"]``), and ``sampler``, ``directions`` (``guided`` for path
     guiding), ``lights``, ``light_points``, ``light_choice`` set one part of it. ``roulette`` is
     ``classic`` or ``ears`` (efficiency-aware roulette and splitting, learned while rendering).
+    ``training_images`` (guided directions only) is ``keep`` (the default: the last training
+    iterations are combined into the image by inverse variance) or ``discard``.
     ``sampler`` may also be a function of your own (see ``SamplerFunction``): slow, since Python
     draws every number, but rendered through the same entry as vrpt's samplers. ``shard`` is
     ``(i, n)``. The image is kept in memory; ``Render.save`` writes it.
@@ -305,6 +308,7 @@ def render(
         target_error=target_error,
         reuse=reuse,
         roulette=roulette,
+        training_images=training_images,
         threads=threads,
         strict=strict,
         stats=stats,

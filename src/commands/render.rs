@@ -82,6 +82,12 @@ pub struct RenderRequest {
     /// up to 20 continuations where that pays [default: classic]
     #[arg(long, value_name = "KIND")]
     pub roulette: Option<crate::integrator::rrs::Roulette>,
+    /// With --directions guided: `keep` combines the last training iterations' images with the
+    /// final iteration's by inverse variance (unbiased: each pixel's weights come from the
+    /// other half of the tiles), `discard` makes the image of the final iteration alone (as
+    /// does --reuse K > 1, whose final samples outweigh the unreused training's) [default: keep]
+    #[arg(long, value_name = "WHAT", value_parser = ["keep", "discard"])]
+    pub training_images: Option<String>,
     /// With --roulette ears: also write the learned factor at each pixel's first vertex (over
     /// 1: the paths split there; under 1: they end more often) as a false-colour PNG.
     #[arg(long, value_name = "PNG")]
@@ -391,6 +397,24 @@ impl RenderRequest {
     /// the time limit, shard, stop flag and adaptive rounds as asked.
     fn plan(&self, settings: &RenderSettings) -> Result<PassPlan> {
         let steady = self.time_limit.is_some() || self.error.target_error.is_some();
+        let auto = self.strategy.is_auto().map_err(Error::Settings)?;
+        if self.training_images.is_some()
+            && (auto || settings.strategy.directions != crate::bsdf::Directions::Guided)
+        {
+            return Err(Error::Settings(
+                "--training-images: only a guided render (--directions guided) trains, and so \
+                 has training images"
+                    .into(),
+            ));
+        }
+        if self.training_images.as_deref() == Some("keep") && settings.reuse > 1 {
+            return Err(Error::Settings(format!(
+                "--training-images keep: a render that reuses paths (--reuse {}) keeps the final \
+                 iteration alone (training paths are not reused, and kept they cost more than \
+                 they bring)",
+                settings.reuse
+            )));
+        }
         Ok(PassPlan {
             pass_spp: self.pass_spp.or(steady.then(|| 16.min(settings.spp))),
             time_limit: self
@@ -404,6 +428,7 @@ impl RenderRequest {
             target_error: self.error.target_error,
             strip: None,
             guide: None,
+            discard_training: self.training_images.as_deref() == Some("discard"),
         })
     }
 }

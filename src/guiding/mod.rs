@@ -46,13 +46,15 @@
 //! ([`GuideAt::survival`]): a path heading where the leaf learned light survives in proportion
 //! to what it is expected to bring.
 //!
-//! **Unbiased.** The image is the final iteration alone: the training iterations use their own
-//! seeds (the render's seed mixed with the iteration number), so the tree that samples the final
-//! iteration is a function of samples independent of the final ones. Given the tree, every final
-//! sample is an ordinary importance-sampled estimate with a pdf that is positive wherever the
-//! BSDF's is (`1 − α ≥ σ(−20) > 0`), hence unbiased; averaging over trees keeps it so. Training samples
-//! are discarded: combining them with weights fixed in advance would also be unbiased, but the
-//! early iterations' variance is far higher and fixed weights cannot know by how much.
+//! **Unbiased.** The training iterations use their own seeds (the render's seed mixed with the
+//! iteration number), so the tree that samples the final iteration is a function of samples
+//! independent of the final ones. Given the tree, every final sample is an ordinary
+//! importance-sampled estimate with a pdf that is positive wherever the BSDF's is
+//! (`1 − α ≥ σ(−20) > 0`), hence unbiased; averaging over trees keeps it so, and so is each
+//! training iteration's image given the tree it sampled with. The image combines the final
+//! iteration with the last training iterations by inverse variance, with weights that sum to one
+//! and, per pixel, come from the other half of the image's tiles (`render::combine`;
+//! `--training-images discard` keeps the final iteration alone, as before issue 51).
 //!
 //! **Deterministic.** Tiles record into their own buffers; after each chunk of tiles the records
 //! are put in tile order, stably sorted by S-tree leaf, and each leaf adds its own records in

@@ -337,6 +337,8 @@ pub const KEYS: &[Key] = &[
                 leaves: 0,
                 quad_nodes: 0,
                 bytes: 0,
+                combined: 0,
+                final_weight: 1.0,
             });
             Ok(())
         },
@@ -387,6 +389,31 @@ pub const KEYS: &[Key] = &[
         read: |m, v| match m.guide.as_mut() {
             Some(g) => set(&mut g.bytes, v.num()?),
             None => Ok(()),
+        },
+    },
+    Key {
+        // absent (files before it, or an image of the final iteration alone): 0
+        name: "guide_combined",
+        write: |m| {
+            m.guide
+                .filter(|g| g.combined > 0)
+                .map(|g| g.combined.to_string())
+        },
+        read: |m, v| match m.guide.as_mut() {
+            Some(g) => set(&mut g.combined, v.opt()?.unwrap_or(0)),
+            None => Ok(()),
+        },
+    },
+    Key {
+        name: "guide_final_weight",
+        write: |m| {
+            (m.guide)
+                .filter(|g| g.combined > 0)
+                .and_then(|g| micros(g.final_weight))
+        },
+        read: |m, v| match (m.guide.as_mut(), v.text) {
+            (Some(g), Some(_)) => set(&mut g.final_weight, v.non_negative()?),
+            _ => Ok(()),
         },
     },
     Key {

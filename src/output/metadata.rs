@@ -162,6 +162,10 @@ pub struct GuideRecord {
     pub leaves: u64,
     pub quad_nodes: u64,
     pub bytes: u64,
+    /// The training iterations the image combines with the final one (0: the final alone),
+    /// and the final iteration's mean weight in it (1 when alone).
+    pub combined: u32,
+    pub final_weight: f64,
 }
 
 impl RenderMetadata {
@@ -199,6 +203,8 @@ impl RenderMetadata {
                 leaves: g.tree.leaves as u64,
                 quad_nodes: g.tree.quad_nodes as u64,
                 bytes: g.tree.bytes as u64,
+                combined: g.combined.map_or(0, |c| c.iterations),
+                final_weight: g.combined.map_or(1.0, |c| c.final_weight),
             }),
             estimate: None,
             adaptive_rounds: None,

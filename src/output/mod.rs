@@ -109,6 +109,8 @@ mod tests {
                 leaves: 40,
                 quad_nodes: 3000,
                 bytes: 123456,
+                combined: 3,
+                final_weight: 0.75,
             }),
             estimate: Some(EstimateRecord {
                 replicates: 4,

@@ -9,7 +9,7 @@
 //! The rooms: this file holds the entry points ([`render`], [`render_passes`],
 //! [`render_passes_with`]), the sampler dispatch and the job every pass shares; `settings` the
 //! settings and their checks, `passes` the uniform passes and the stop condition, `adaptive` the
-//! adaptive rounds, `training` the guide's training, `rrs_training` EARS's, `tile` the tile
+//! adaptive rounds, `training` the guide's training, `combine` its images kept, `rrs_training` EARS's, `tile` the tile
 //! kernel, `stats` what a render counts and its text, `strip` a render of some of the image's
 //! tiles, `auto` the pilots of `--strategy auto`.
 
@@ -36,6 +36,7 @@ use std::time::{Duration, Instant};
 
 mod adaptive;
 pub mod auto;
+mod combine;
 mod passes;
 mod rrs_training;
 mod settings;
@@ -43,6 +44,7 @@ mod stats;
 mod strip;
 mod tile;
 mod training;
+pub use combine::{Combination, KEPT_BYTES_PER_PIXEL, KEPT_ITERATIONS};
 use settings::camera_for;
 pub use settings::{RenderSettings, ACTING_REPLICATES, MAX_REUSE};
 pub use stats::{GuideStats, RenderStats, RrsStats};
@@ -214,6 +216,14 @@ pub struct PassPlan {
     /// (`--strategy auto` hands over its guided pilot's; [`LearnedGuide`]). Ignored by a render
     /// whose directions are not guided.
     pub guide: Option<Arc<LearnedGuide>>,
+    /// A guided render that trains its own guide keeps its last training iterations in the
+    /// image, combined with the final iteration by inverse variance (`render::combine`),
+    /// unless this is set (`--training-images discard`), or it renders several replicates, a
+    /// shard or adaptive rounds (their estimates and merges count the final samples alone), or
+    /// reuses paths (training paths are not reused, and their heavier tails cost more than
+    /// their samples bring: with `--reuse 4` at 10 s, kept at a third of the time, 0.95× on the
+    /// door, 1.00× on door-dark and 0.76× on the gap of the image without them).
+    pub discard_training: bool,
 }
 
 /// Wall time the samples that a stopped render takes after the stop aim at (see
@@ -356,6 +366,7 @@ pub fn render_passes_with<F: SamplerFactory>(
         if let Some(l) = learned {
             stats.guide = Some(l.stats);
         }
+        let mut kept = keeps_training(settings, plan).then(combine::KeptIterations::default);
         let tree = (guided && learned.is_none()).then(|| {
             let trainer = Trainer {
                 scene,
@@ -364,7 +375,8 @@ pub fn render_passes_with<F: SamplerFactory>(
                 plan,
                 factory,
             };
-            trainer.train(start, TrainingBudget::of_render(settings, plan), &mut stats)
+            let budget = TrainingBudget::of_render(settings, plan);
+            trainer.train(start, budget, &mut stats, kept.as_mut())
         });
         let tree = learned.map(|l| &l.tree).or(tree.as_ref());
         let guide = Guiding {
@@ -394,6 +406,11 @@ pub fn render_passes_with<F: SamplerFactory>(
         } else {
             job.uniform(&mut stats)?
         };
+        if let (Some(kept), Some(g)) = (kept.filter(|_| learned.is_none()), &mut stats.guide) {
+            let images: Vec<_> = kept.images().collect();
+            g.combined = Some(combine::combine(&mut r.film, &images));
+            r.estimate = ErrorEstimate::of(&Replicates::new(1, r.film.len()), &r.film);
+        }
         stats.elapsed = start.elapsed();
         if let (Some(t), Some(g)) = (tree, &mut stats.guide) {
             g.final_time = stats.elapsed - training;
@@ -408,6 +425,18 @@ pub fn render_passes_with<F: SamplerFactory>(
             .map(|s| s.first_vertex_map(scene, &camera, (settings.width, settings.height)));
         Ok(r)
     })?
+}
+
+/// Whether a guided render of `settings` under `plan` that trains its own guide keeps its
+/// training iterations in the image ([`PassPlan::discard_training`]).
+fn keeps_training(settings: &RenderSettings, plan: &PassPlan) -> bool {
+    settings.strategy.directions == Directions::Guided
+        && plan.guide.is_none()
+        && !plan.discard_training
+        && settings.replicates == 1
+        && settings.reuse <= 1
+        && plan.shard.is_none()
+        && !plan.adaptive
 }
 
 /// The camera of a render of `settings` under `plan`: the image's, whose size is the strip's

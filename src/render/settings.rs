@@ -136,6 +136,21 @@ pub(super) fn camera_for(scene: &Scene, settings: &RenderSettings) -> Result<Cam
         )));
     }
     crate::limits::check_render_memory(settings.width, settings.height, settings.replicates)?;
+    if settings.strategy.directions == crate::bsdf::Directions::Guided {
+        // the training images a guided render may keep (`render::combine`): each kept one, a
+        // training iteration's film (56 B) and the final iteration's image when combined
+        let per_pixel = super::KEPT_ITERATIONS as u64 * super::KEPT_BYTES_PER_PIXEL
+            + 56
+            + super::KEPT_BYTES_PER_PIXEL;
+        let pixels = settings.width as u64 * settings.height as u64;
+        crate::limits::check_bytes(
+            &format!(
+                "a guided {}x{} image with its training images",
+                settings.width, settings.height
+            ),
+            pixels * (crate::limits::BYTES_PER_PIXEL + per_pixel),
+        )?;
+    }
     Camera::new(&scene.camera, settings.width, settings.height).ok_or_else(|| {
         Error::Settings(format!(
             "degenerate camera (eye {}, target {}, up {}, fov {}°)",

@@ -77,6 +77,9 @@ pub struct GuideStats {
     pub final_time: Duration,
     /// The learned tree's size.
     pub tree: TreeSize,
+    /// The training iterations kept in the image (`None`: the image is the final iteration
+    /// alone).
+    pub combined: Option<super::Combination>,
 }
 
 impl GuideStats {
@@ -94,7 +97,14 @@ impl GuideStats {
             self.tree.leaves,
             self.tree.quad_nodes,
             self.tree.bytes as f64 / (1024.0 * 1024.0)
-        )
+        ) + &match self.combined {
+            Some(c) => format!(
+                "guiding: the image combines the final iteration with the last {} training \
+                 iterations by inverse variance (final iteration's weight {:.3})\n",
+                c.iterations, c.final_weight
+            ),
+            None => String::new(),
+        }
     }
 }
 

@@ -71,6 +71,29 @@ pub(super) struct BatchOutput {
     pub(super) rrs_records: Vec<RrsRecord>,
     /// What the samples added to the pixels' sums (a render without a film only).
     pub(super) total: DVec3,
+    /// The tiles' pixel sums from zero (a render without a film only), in tile order.
+    pub(super) tile_sums: Vec<TileSums>,
+}
+
+/// One tile's pixel sums (Σ L, Σ L², count), row by row from its corner `origin`, `width`
+/// pixels a row.
+pub(super) struct TileSums {
+    pub(super) origin: UVec2,
+    pub(super) width: u32,
+    pub(super) sums: Vec<(DVec3, DVec3, u64)>,
+}
+
+impl TileSums {
+    /// Add the sums to `film`'s pixels.
+    pub(super) fn add_to(&self, film: &mut Film) {
+        for (k, &(s, s2, n)) in self.sums.iter().enumerate() {
+            let (x, y) = (
+                self.origin.x + k as u32 % self.width,
+                self.origin.y + k as u32 / self.width,
+            );
+            film.add_pixel_sums(film.index(x, y), s, s2, n);
+        }
+    }
 }
 
 /// What the tile kernel renders with: the scene seen by the camera at `width × height`, what the
@@ -506,6 +529,7 @@ fn gather(tiles: Vec<Tile>, mut film: Option<&mut Film>) -> BatchOutput {
         records: Vec::with_capacity(tiles.iter().map(|t| t.records.len()).sum()),
         rrs_records: Vec::with_capacity(tiles.iter().map(|t| t.rrs_records.len()).sum()),
         total: DVec3::ZERO,
+        tile_sums: Vec::new(),
     };
     for mut tile in tiles {
         out.records.append(&mut tile.records);
@@ -513,7 +537,14 @@ fn gather(tiles: Vec<Tile>, mut film: Option<&mut Film>) -> BatchOutput {
         // the pixels a tile rendered, in its order (all of them unless it was cut short)
         let w = tile.size.x as usize;
         match film.as_deref_mut() {
-            None => out.total += tile.sums.iter().map(|s| s.0).sum::<DVec3>(),
+            None => {
+                out.total += tile.sums.iter().map(|s| s.0).sum::<DVec3>();
+                out.tile_sums.push(TileSums {
+                    origin: tile.origin,
+                    width: tile.size.x,
+                    sums: std::mem::take(&mut tile.sums),
+                });
+            }
             Some(film) => {
                 for (k, &(s, s2, n)) in tile.sums.iter().enumerate() {
                     let (x, y) = (

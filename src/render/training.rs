@@ -3,6 +3,7 @@
 //! records reach the tree in a fixed order, so the tree is a function of the seed alone and
 //! training memory does not grow with the spp.
 
+use super::combine::KeptIterations;
 use super::*;
 
 /// What a guided render's training needs: the render's scene, camera, settings and plan, and
@@ -27,11 +28,21 @@ pub struct TrainingBudget {
 }
 
 impl TrainingBudget {
-    /// A guided render's own training: half its spp, and a third of its time limit.
+    /// A guided render's own training: half its spp; half its time limit where the image
+    /// keeps the training iterations ([`PassPlan::discard_training`]), a third where it is the
+    /// final iteration alone. Measured at 10 s on the door, door-dark and the gap (three seed
+    /// pairs, interleaved): keeping the training images at a third 1.13×, 1.05×, 1.22× lower
+    /// relMSE than discarding them, at a half 1.30×, 1.22×, 1.16× (docs/guiding.md has the
+    /// table).
     pub fn of_render(settings: &RenderSettings, plan: &PassPlan) -> TrainingBudget {
+        let share = if super::keeps_training(settings, plan) {
+            2
+        } else {
+            3
+        };
         TrainingBudget {
             spp: (settings.spp as u64 / 2).max(1),
-            time: plan.time_limit.map(|t| t / 3),
+            time: plan.time_limit.map(|t| t / share),
         }
     }
 }
@@ -64,11 +75,14 @@ impl<F: SamplerFactory> Trainer<'_, F> {
     /// next iteration (estimated at twice the last's time per pixel sample) would end by
     /// `budget.time` after `start`. A set stop flag ends the training. Training's rays and
     /// thread time are added to `stats`, and its [`GuideStats`] set there.
+    /// With `kept`, the images of the iterations of 2 spp or more are kept there (the last
+    /// [`super::combine::KEPT_ITERATIONS`] of them).
     pub(super) fn train(
         &self,
         start: Instant,
         budget: TrainingBudget,
         stats: &mut RenderStats,
+        mut kept: Option<&mut KeptIterations>,
     ) -> Guide {
         let (lo, hi) = scene_bounds(self.scene);
         let mut tree = Guide::new(lo, hi);
@@ -88,7 +102,8 @@ impl<F: SamplerFactory> Trainer<'_, F> {
                 }
             }
             let began = Instant::now();
-            if !self.iteration(k, &mut tree, stats) {
+            let keep = kept.as_deref_mut().filter(|_| spp >= 2);
+            if !self.iteration(k, &mut tree, stats, keep) {
                 break;
             }
             g.iterations += 1;
@@ -104,8 +119,14 @@ impl<F: SamplerFactory> Trainer<'_, F> {
     /// chunk in a fixed order, then the tree refined for the next iteration. It uses seed
     /// `mix64(seed ⊕ (k + 1)·φ)`, whatever the render's first sample or shard: every shard of a
     /// render learns the same tree. False when the stop flag cut it (its last chunk's records
-    /// dropped, the tree not refined).
-    fn iteration(&self, k: u32, tree: &mut Guide, stats: &mut RenderStats) -> bool {
+    /// dropped, the tree not refined). With `kept`, its image is kept there.
+    fn iteration(
+        &self,
+        k: u32,
+        tree: &mut Guide,
+        stats: &mut RenderStats,
+        kept: Option<&mut KeptIterations>,
+    ) -> bool {
         let settings = self.settings;
         let spp = 1u64 << k;
         let seed =
@@ -115,6 +136,9 @@ impl<F: SamplerFactory> Trainer<'_, F> {
             size: spp as u32,
         };
         let (mut sum, mut n_samples) = (glam::DVec3::ZERO, 0u64);
+        let mut film = kept
+            .as_ref()
+            .map(|_| Film::new(settings.width, settings.height));
         for (tiles, samples) in training_chunks(tile_count(settings), spp) {
             let pieces = sample_pieces(&tiles, samples);
             let guide = Guiding {
@@ -152,12 +176,20 @@ impl<F: SamplerFactory> Trainer<'_, F> {
                 n_samples += r.stats.samples;
                 stats.rays.add(&r.stats.rays);
                 stats.thread_time += r.stats.thread_time;
+                if let Some(film) = film.as_mut() {
+                    for t in &r.tile_sums {
+                        t.add_to(film);
+                    }
+                }
                 tree.add_records(r.records);
             }
         }
         tree.finish_iteration(spp * settings.width as u64 * settings.height as u64);
         if n_samples > 0 {
             tree.set_image_mean(crate::math::luminance((sum / n_samples as f64).as_vec3()));
+        }
+        if let (Some(kept), Some(film)) = (kept, film) {
+            kept.push(&film);
         }
         true
     }
@@ -251,7 +283,7 @@ pub fn learn_guide_with(
                     plan: self.3,
                     factory,
                 };
-                trainer.train(self.5, self.4, self.6)
+                trainer.train(self.5, self.4, self.6, None)
             }
         }
         let work = Train(scene, &camera, settings, plan, budget, start, &mut stats);

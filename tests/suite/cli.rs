@@ -517,9 +517,10 @@ fn stats_report_the_time_split_and_change_no_pixel() {
     assert!(read(&a) == read(&b), "--stats changed the image");
 }
 
-/// A guided render says how its time split between training and the final iteration and how big
-/// its tree grew, on `--stats` and in the EXR's metadata; `vrpt guide` writes its map and
-/// refuses what it cannot show in one line.
+/// A guided render says how its time split between training and the final iteration, how big
+/// its tree grew and which training iterations its image combines, on `--stats` and in the
+/// EXR's metadata (`--training-images discard`: none; refused without guided directions);
+/// `vrpt guide` writes its map and refuses what it cannot show in one line.
 #[test]
 fn guided_renders_report_their_training_and_guide_shows_it() {
     let dir = tempfile::tempdir().unwrap();
@@ -557,6 +558,58 @@ fn guided_renders_report_their_training_and_guide_shows_it() {
     assert!(g.leaves >= 1 && g.quad_nodes >= 1 && g.bytes > 0);
     assert!(g.training_seconds > 0.0 && g.final_seconds > 0.0);
     assert_eq!(meta.spp, 16);
+    // iterations of 2 and 4 spp hold a variance to weigh by; the one of 1 spp does not
+    assert!(
+        err.contains("the image combines the final iteration with the last 2 training iterations"),
+        "{err}"
+    );
+    assert_eq!(g.combined, 2);
+    assert!(g.final_weight > 0.0 && g.final_weight < 1.0, "{g:?}");
+    assert_eq!(img.samples.as_ref().unwrap()[0], 16 + 2 + 4);
+    let render = |extra: &[&str]| {
+        let mut a = vec![
+            "render",
+            scene.to_str().unwrap(),
+            "--width",
+            "32",
+            "--height",
+            "32",
+            "--spp",
+            "16",
+            "--stats",
+            "-o",
+            exr.to_str().unwrap(),
+        ];
+        a.extend_from_slice(extra);
+        vrpt(&a)
+    };
+    let out = render(&["--directions", "guided", "--training-images", "discard"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success() && !err.contains("combines"), "{err}");
+    let img = vrpt::image_io::read_exr(&exr).unwrap();
+    let meta = vrpt::output::RenderMetadata::require(&img, &exr).unwrap();
+    assert_eq!(
+        meta.guide.map(|g| (g.combined, g.final_weight)),
+        Some((0, 1.0))
+    );
+    assert_eq!(img.samples.as_ref().unwrap()[0], 16);
+    assert_one_line_error(
+        &render(&["--training-images", "keep"]),
+        "training images without guiding",
+        "only a guided render",
+    );
+    assert_one_line_error(
+        &render(&[
+            "--directions",
+            "guided",
+            "--reuse",
+            "2",
+            "--training-images",
+            "keep",
+        ]),
+        "training images kept with path reuse",
+        "final iteration alone",
+    );
 
     let png = dir.path().join("guide.png");
     let args = |extra: &[&str]| {

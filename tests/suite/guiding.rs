@@ -208,7 +208,8 @@ fn learned_quadtrees_sample_their_pdf() {
 /// A guide handed to a render ([`PassPlan::guide`], as `--strategy auto` hands over its guided
 /// pilot's) is the guide the render samples with, and the render trains none of its own: a
 /// guided render given the guide `learn_guide` learns with the render's own seeds and budget is
-/// the render that trains it itself, bit for bit, with the same training stats; given a guide
+/// the render that trains it itself and discards its training images, bit for bit, with the
+/// same training stats (keeping them, the image differs, and says so); given a guide
 /// learned with another seed, its image differs (so the given guide is what sampled it); a
 /// render whose directions are not guided ignores a given guide.
 #[test]
@@ -234,14 +235,29 @@ fn a_handed_over_guide_renders_as_the_guide_learned_in_place() {
         let stats = stats.guide.unwrap();
         Some(Arc::new(LearnedGuide { tree, stats }))
     };
-    let render = |settings: &RenderSettings, guide| {
+    let render_with = |settings: &RenderSettings, guide, discard_training| {
         let plan = PassPlan {
             guide,
+            discard_training,
             ..PassPlan::default()
         };
         render_passes(&scene, settings, &plan, &NoProgress).unwrap()
     };
-    let own = render(&settings, None);
+    let render = |settings: &RenderSettings, guide| render_with(settings, guide, false);
+    let own = render_with(&settings, None, true);
+    assert_eq!(own.stats.guide.unwrap().combined, None);
+    let kept = render(&settings, None);
+    let c = kept
+        .stats
+        .guide
+        .unwrap()
+        .combined
+        .expect("training images kept");
+    // 16 spp: training 1 + 2 + 4 spp, the last two with a variance to weigh
+    assert_eq!(c.iterations, 2);
+    assert!(c.final_weight > 0.0 && c.final_weight < 1.0, "{c:?}");
+    assert_ne!(kept.film.mean_image(), own.film.mean_image());
+    assert_eq!(kept.film.count(0), own.film.count(0) + 6);
     let given = learned(&settings);
     let handed = render(&settings, given.clone());
     assert_eq!(handed.film.mean_image(), own.film.mean_image());
