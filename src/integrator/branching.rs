@@ -99,7 +99,7 @@ impl<'a> Path<'a> {
         let first_u = BounceSample::draw_needed(sampler, self.sample_lights, lobe, true, guided);
         rays.mark(Phase::Sampler);
         let v = Vertex::new(self.scene, s, front, wo);
-        let g = (self.guide).map(|t| GuideAt::new(t, s.p).for_bsdf(bsdf.diffuse_share()));
+        let g = (self.guide).and_then(|t| GuideAt::for_image(t, s.p, bsdf.diffuse_share()));
         let bin = direction_bin(wo);
         let n = rrs.factor(v.p, bin, whole, segment);
         // n ≤ 1 + extra, so the count never passes what is left

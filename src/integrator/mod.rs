@@ -451,7 +451,12 @@ impl<'a> Path<'a> {
         );
         rays.mark(Phase::Sampler);
         let v = Vertex::new(scene, s, front, wo);
-        let g = (self.guide).map(|t| GuideAt::new(t, s.p).for_bsdf(bsdf.diffuse_share()));
+        let diffuse = bsdf.diffuse_share();
+        let g = match (self.guide, rec.is_some()) {
+            (Some(t), true) => Some(GuideAt::new(t, s.p).for_bsdf(diffuse)),
+            (Some(t), false) => GuideAt::for_image(t, s.p, diffuse),
+            (None, _) => None,
+        };
         rays.mark(Phase::Shade);
         if let Some(sp) = split.as_deref_mut().filter(|_| segment <= 2) {
             let arrival = (st.prev.map_or(0.0, |p| p.pdf), t, -wo);
