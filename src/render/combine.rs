@@ -151,27 +151,7 @@ pub(super) fn combine(film: &mut Film, kept: &[&IterationImage]) -> Combination 
             }
         }
     }
-    // a_g for the pixels of each class: from the other class's V_g (its own with no other)
-    let weights: [Vec<f64>; 2] = [0, 1].map(|c| {
-        let other = if terms.iter().all(|t| t[1 - c] > 0) {
-            [1 - c]
-        } else {
-            [c]
-        };
-        let from = |k: usize, a: &[[f64; 2]]| other.iter().map(|&o| a[k][o]).sum::<f64>();
-        let inverse: Vec<f64> = (0..groups.len())
-            .map(|k| {
-                let t: u64 = other.iter().map(|&o| terms[k][o]).sum();
-                let v = from(k, &rel) / t.max(1) as f64;
-                1.0 / v
-            })
-            .collect();
-        if inverse.iter().all(|a| a.is_finite() && *a > 0.0) {
-            inverse
-        } else {
-            (0..groups.len()).map(|k| from(k, &samples)).collect()
-        }
-    });
+    let weights = class_weights(&rel, &terms, &samples);
     let mut final_weight = 0.0;
     for i in 0..n_pixels {
         let a = &weights[class(i, width)];
@@ -199,6 +179,28 @@ pub(super) fn combine(film: &mut Film, kept: &[&IterationImage]) -> Combination 
         iterations: kept.len() as u32,
         final_weight: final_weight / n_pixels.max(1) as f64,
     }
+}
+
+/// `a_g` for the pixels of each class, from the other class's `V_g` (its own where the other
+/// class has no terms for some group): `1/V_g`, or the groups' samples where some `V_g` is not
+/// positive and finite. `rel`, `terms` and `samples` are per group and class: `Σ v/(F² + ε)`,
+/// its terms, and the samples.
+fn class_weights(rel: &[[f64; 2]], terms: &[[u64; 2]], samples: &[[f64; 2]]) -> [Vec<f64>; 2] {
+    [0, 1].map(|c| {
+        let o = if terms.iter().all(|t| t[1 - c] > 0) {
+            1 - c
+        } else {
+            c
+        };
+        let inverse: Vec<f64> = (0..rel.len())
+            .map(|k| 1.0 / (rel[k][o] / terms[k][o].max(1) as f64))
+            .collect();
+        if inverse.iter().all(|a| a.is_finite() && *a > 0.0) {
+            inverse
+        } else {
+            samples.iter().map(|s| s[o]).collect()
+        }
+    })
 }
 
 #[cfg(test)]
