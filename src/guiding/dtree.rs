@@ -46,6 +46,11 @@ pub struct DTree {
     /// The mean of its records' values: an estimate of `∫ L_i dω` over the sphere, so that
     /// `radiance · pdf(ω)` estimates the radiance arriving from `ω`.
     radiance: f32,
+    /// How the sampling density maps back to the learned one ([`DTree::learned_density`]):
+    /// 1 and 0 for an uncompensated tree; for a compensated one the uncompensated total over
+    /// the compensated one's, and 1 (the mean density).
+    scale: f32,
+    floor: f32,
 }
 
 impl Default for DTree {
@@ -54,6 +59,8 @@ impl Default for DTree {
             nodes: vec![QNode::default()],
             total: 0.0,
             radiance: 0.0,
+            scale: 1.0,
+            floor: 0.0,
         }
     }
 }
@@ -70,6 +77,8 @@ impl DTree {
                 .collect(),
             total: 0.0,
             radiance: 0.0,
+            scale: 1.0,
+            floor: 0.0,
         };
         t.build();
         t
@@ -84,6 +93,16 @@ impl DTree {
     #[inline]
     pub fn radiance(&self) -> f32 {
         self.radiance
+    }
+
+    /// The learned density (per unit area of the square, normalised to 1 over it) at a point
+    /// where this tree's sampling density is `pdf`: `pdf` itself for an uncompensated tree;
+    /// for a compensated one ([`DTree::compensated`]) exactly the learned density where `pdf`
+    /// is positive, `scale·pdf + 1`, and where it is zero the mean density 1, an upper bound
+    /// of the learned one there.
+    #[inline]
+    pub fn learned_density(&self, pdf: f32) -> f32 {
+        self.scale * pdf + self.floor
     }
 
     /// Set it from the number of records the tree was built from.
@@ -304,6 +323,43 @@ impl DTree {
         };
     }
 
+    /// Replace each leaf quadrant's energy `s` by `f(s, a)`, `a` the quadrant's share of the
+    /// square's area, and sum the tree up again.
+    pub(super) fn map_leaves(&mut self, f: impl Fn(f32, f32) -> f32) {
+        // children have higher indices than their parents: one pass from the front gives
+        // every node the area of its quadrants before its children are reached
+        let mut area = vec![0.0f32; self.nodes.len()];
+        area[0] = 0.25;
+        for n in 0..self.nodes.len() {
+            for i in 0..4 {
+                match self.nodes[n].child[i] {
+                    0 => self.nodes[n].sum[i] = f(self.nodes[n].sum[i], area[n]),
+                    c => area[c as usize] = area[n] * 0.25,
+                }
+            }
+        }
+        self.build();
+    }
+
+    /// This (built) tree compensated for the BSDF strategy it is mixed with (Karlík, Šik,
+    /// Vévoda, Skřivan, Křivánek 2019): each leaf quadrant's energy `s` (over area `a` of the
+    /// square) becomes `max(0, s − T·a)`, `T` the tree's total, i.e. its density less the
+    /// mean density, so the guide spends its samples where the radiance is above average and
+    /// the defensive strategy covers the rest. A tree with nothing above its mean (uniform, or
+    /// empty) is returned as it is. `∫ L_i dω` ([`DTree::radiance`]) stays the learned one.
+    pub(super) fn compensated(&self) -> DTree {
+        let mut t = self.clone();
+        let mean = self.total;
+        t.map_leaves(|s, a| (s - mean * a).max(0.0));
+        if t.total > 0.0 {
+            t.scale = t.total / self.total;
+            t.floor = 1.0;
+            t
+        } else {
+            self.clone()
+        }
+    }
+
     /// An empty tree whose quadrants are split where this (built) tree held more than `rho` of
     /// its energy (a quadrant this tree did not split goes on splitting with a quarter of its
     /// energy per child, as the authors' code does), at most [`MAX_QUAD_DEPTH`] deep.
@@ -455,11 +511,85 @@ mod tests {
         assert!(spread >= 2, "boxes straddling leaves: {spread}");
     }
 
-    /// The density a sample's descent returns is the density the tree gives its point.
+    /// MIS compensation by hand: a tree of total 8 with energy 4 in a sixteenth of the square
+    /// (density 8 against the mean 1) and 2, 1, 1 in three quarters (densities 1, ½, ½) keeps
+    /// `4 − 8/16 = 3.5` in the sixteenth and nothing elsewhere, so its sampling density is 16
+    /// there and 0 elsewhere; the learned density read back is 8 there and the mean, 1, where
+    /// the compensated tree is zero. A uniform tree has nothing above its mean and stays as it is.
+    #[test]
+    fn compensation_subtracts_the_mean_density() {
+        let t = DTree::from_nodes(&[
+            ([0.0, 2.0, 1.0, 1.0], [1, 0, 0, 0]),
+            ([4.0, 0.0, 0.0, 0.0], [0; 4]),
+        ]);
+        assert_eq!(t.total(), 8.0);
+        let c = t.compensated();
+        assert_eq!(c.total(), 3.5);
+        let (hot, warm, cold) = (
+            Vec2::new(0.1, 0.1),
+            Vec2::new(0.75, 0.25),
+            Vec2::new(0.25, 0.75),
+        );
+        assert_eq!(t.pdf_canonical(hot), 8.0);
+        assert_eq!(c.pdf_canonical(hot), 16.0);
+        assert_eq!(c.pdf_canonical(warm), 0.0);
+        assert_eq!(c.pdf_canonical(cold), 0.0);
+        assert_eq!(c.learned_density(c.pdf_canonical(hot)), 8.0);
+        assert_eq!(c.learned_density(0.0), 1.0);
+        assert_eq!(c.radiance(), t.radiance());
+        let uniform = DTree::from_nodes(&[([1.0; 4], [0; 4])]);
+        assert_eq!(uniform.compensated(), uniform);
+        assert_eq!(uniform.learned_density(1.0), 1.0);
+    }
+
+    /// On a learned tree many levels deep, the compensated tree read back gives the learned
+    /// density wherever it lies above the mean and the mean elsewhere: `max(p, 1)`, so each
+    /// leaf's area was found right at every depth.
+    #[test]
+    fn compensation_reads_back_the_learned_density_above_its_mean() {
+        let t = learned();
+        let c = t.compensated();
+        assert!(c.total() > 0.0 && c.total() < t.total());
+        let (mut above, mut below) = (0, 0);
+        for i in 0..256 {
+            for j in 0..256 {
+                let p = Vec2::new((i as f32 + 0.5) / 256.0, (j as f32 + 0.5) / 256.0);
+                let (want, got) = (
+                    t.pdf_canonical(p).max(1.0),
+                    c.learned_density(c.pdf_canonical(p)),
+                );
+                assert!(
+                    (got - want).abs() <= 1e-3 * want,
+                    "{p}: {got} against {want}"
+                );
+                if c.pdf_canonical(p) > 0.0 {
+                    above += 1;
+                } else {
+                    below += 1;
+                }
+            }
+        }
+        assert!(above > 0 && below > 0, "{above} {below}");
+    }
+
+    /// The density a sample's descent returns is the density the tree gives its point, and a
+    /// compensated tree's samples land only where its density is positive.
     #[test]
     fn a_sample_carries_its_own_pdf() {
         let t = learned();
         assert!(t.total() > 0.0 && t.depth() > 3);
+        let c = t.compensated();
+        for i in 0..4096u32 {
+            let u = Vec2::new(
+                (i as f32 * 0.754_877_7 + 0.1).fract(),
+                (i as f32 * 0.569_840_3 + 0.3).fract(),
+            );
+            let (p, pdf) = c.sample_canonical_pdf(u);
+            assert!(
+                pdf > 0.0 && (pdf - c.pdf_canonical(p)).abs() <= 1e-4 * pdf,
+                "{p} {pdf}"
+            );
+        }
         for i in 0..4096u32 {
             let u = Vec2::new(
                 (i as f32 * 0.754_877_7 + 0.1).fract(),

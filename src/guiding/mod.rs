@@ -29,8 +29,14 @@
 //! quadtree leaf's size at its point ([`DTree`]'s `record_box`), so neighbouring cells learn
 //! alike (on the door at 10 s without the directional box: 1.35× the MSE). Each record also
 //! feeds the leaf's learner of `α` (Adam on the KL divergence; see `guiding/fraction.rs`). After the
-//! iteration each leaf's quadtree is summed up to its root and becomes the leaf's sampling
-//! distribution (with `∫ L_i dω` estimated as its records' mean, [`DTree::radiance`]); then an
+//! iteration each leaf's quadtree is summed up to its root (with `∫ L_i dω` estimated as its
+//! records' mean, [`DTree::radiance`]), and its *MIS-compensated* copy becomes the leaf's
+//! sampling distribution (Karlík, Šik, Vévoda, Skřivan, Křivánek, "MIS Compensation: Optimizing
+//! Sampling Techniques in Multiple Importance Sampling", 2019; [`DTree::compensated`]): each
+//! leaf quadrant's density less the tree's mean density, at least zero. The guide is one of two
+//! strategies of a mixture whose other one, the BSDF's, already covers the directions of
+//! average radiance; the guide is most use where the radiance is above average and spends its
+//! samples there (10 s, six seed pairs; see `MAX_GUIDE_FRACTION` for the whole change). Then an
 //! S-tree leaf that recorded more than `c·√(N_k/N_0)` samples ([`SPATIAL_THRESHOLD`]) is halved
 //! until its halves have not (each half starts from a copy of the leaf's distribution), and
 //! each D-tree is rebuilt empty with a quadrant split where it held more than
@@ -38,7 +44,7 @@
 //!
 //! **Sampling** (the integrator): one-sample MIS between the BSDF's own strategy (the Phong
 //! lobes) and the guide, the guide chosen with probability `α`, learned per leaf from
-//! [`GUIDE_FRACTION`] on (a leaf that has learned nothing has `α = 0`: pure BSDF sampling, as
+//! [`GUIDE_FRACTION`] on and at most [`MAX_GUIDE_FRACTION`] (a leaf that has learned nothing has `α = 0`: pure BSDF sampling, as
 //! in the first iteration) and scaled at each vertex by its BSDF's diffuse share
 //! ([`GuideAt::for_bsdf`]: a narrow lobe is sampled by its own strategy), and an image's path
 //! samples the BSDF alone where the diffuse share is below [`MIN_GUIDE_SHARE`]
@@ -77,6 +83,25 @@ use std::f32::consts::PI;
 
 /// `α` of a leaf before it has learned its own: the probability of sampling the guide.
 pub const GUIDE_FRACTION: f32 = 0.5;
+
+/// The largest share `α` of a leaf's samples the guide takes, whatever its learner says: the
+/// BSDF's strategy keeps at least half, as the defensive one of the mixture. The guide samples
+/// its MIS-compensated density ([`DTree::compensated`]), zero wherever the learned radiance is
+/// below its mean, and there the BSDF's samples alone carry the integrand, with weight
+/// `1/((1 − α)·p_bsdf)`: the learner's `α` near 1 makes them fireflies.
+///
+/// The change as a whole (compensation, this bound, and the guide's roulette reading the
+/// learned density, not the compensated one: [`GuideAt::survival`]), `--directions guided` at
+/// 10 s, relMSE from six seed pairs (1–6, 11–16; two runs of three, configs interleaved, one
+/// denominator per scene), before → after: door 0.127 → 0.102 (1.25×), gap 0.31 → 0.168
+/// (1.84×), Cornell box 4.05e-3 → 3.70e-3 (1.10×; phong+mis 4.06e-3). Compensation with the
+/// roulette reading the compensated density (0 below the mean: such paths lost the guide's
+/// roulette) cost the door 2.7× and the gap 3.1×; without the bound (seeds 1–6) the change
+/// gained the door 1.25×, the gap 1.66×, the box 1.02×. Learning the square root of the
+/// radiance's second moment (Rath et al. 2020's variance-aware target) instead of its mean
+/// gained the Cornell box up to 1.3× but lost the door 1.1–1.3× and the gap up to 1.17×, with
+/// or without compensation: not kept.
+pub const MAX_GUIDE_FRACTION: f32 = 0.5;
 
 /// The least diffuse share of a BSDF ([`crate::bsdf::Bsdf::diffuse_share`]) at which an image's
 /// path is guided at a vertex: below it the guide's share `α` (at most 1, scaled by it) is below
@@ -263,8 +288,9 @@ impl<'a> GuideAt<'a> {
     /// The survival probability guide-driven Russian roulette asks for a path whose
     /// throughput after this vertex's bounce is `beta`, its direction of guide pdf `p_guide`:
     /// `min(0.99, k·r)` with `r = lum(β)·L̂ / Ī` the rest of the path's expected share of a
-    /// pixel — `L̂ = radiance()·p_guide` the radiance the leaf learned to arrive from the
-    /// direction, `Ī` the image's mean luminance from the last training iteration — and `k` =
+    /// pixel — `L̂ = radiance()·p_learned` the radiance the leaf learned to arrive from the
+    /// direction (`p_learned` the learned density where the compensated `p_guide` is positive,
+    /// the mean density where it is zero: [`DTree::learned_density`]), `Ī` the image's mean luminance from the last training iteration — and `k` =
     /// [`ROULETTE_SCALE`]; 0 where the leaf learned nothing. The integrator keeps a path with
     /// the larger of this and the throughput rule's probability, so a path the guide expects
     /// to carry light is not cut for its small `β` (a guided bounce toward a small bright
@@ -272,8 +298,10 @@ impl<'a> GuideAt<'a> {
     /// any value in `(0, 1]`: a survivor is divided by it.
     #[inline]
     pub fn survival(&self, beta: Vec3, p_guide: f32) -> f32 {
+        let learned =
+            self.dtree.learned_density(p_guide / Self::PER_STERADIAN) * Self::PER_STERADIAN;
         let r =
-            crate::math::luminance(beta) * self.dtree.radiance() * p_guide / self.tree.image_mean();
+            crate::math::luminance(beta) * self.dtree.radiance() * learned / self.tree.image_mean();
         if r > 0.0 {
             (ROULETTE_SCALE * r).min(0.99)
         } else {
@@ -354,5 +382,24 @@ mod tests {
         let image = GuideAt::for_image(&t, p, diffuse.diffuse_share()).expect("guided");
         assert_eq!(image.alpha, GUIDE_FRACTION);
         assert!(GuideAt::for_image(&t, p, plate.diffuse_share()).is_none());
+        // records that favour the guide (its pdf 40× the BSDF's where the product is) teach
+        // the learner an α above ½; the leaf samples the guide with at most MAX_GUIDE_FRACTION
+        for _ in 0..4 {
+            let leaf = t.leaf_at(p);
+            let records = (0..4000)
+                .map(|_| Record {
+                    leaf,
+                    point: up,
+                    value: 1.0,
+                    product: 1.0,
+                    pdf: 0.5 * 4.0 + 0.5 * 0.1,
+                    p_bsdf: 0.1,
+                    p_guide: 4.0,
+                })
+                .collect();
+            t.add_records(records);
+            t.finish_iteration(4000);
+        }
+        assert_eq!(GuideAt::new(&t, p).alpha, MAX_GUIDE_FRACTION);
     }
 }

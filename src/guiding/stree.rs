@@ -2,7 +2,10 @@
 //! samples and the one being recorded, the records' arrival and the splits between iterations.
 
 use super::fraction::FractionLearner;
-use super::{DTree, Record, ENERGY_FRACTION, GUIDE_FRACTION, REFERENCE_PATHS, SPATIAL_THRESHOLD};
+use super::{
+    DTree, Record, ENERGY_FRACTION, GUIDE_FRACTION, MAX_GUIDE_FRACTION, REFERENCE_PATHS,
+    SPATIAL_THRESHOLD,
+};
 use crate::sampling::ONE_MINUS_EPSILON;
 use glam::Vec3;
 use rayon::prelude::*;
@@ -173,7 +176,7 @@ impl SdTree {
         self.leaves.par_iter_mut().for_each(|leaf| {
             leaf.building.build();
             leaf.building.set_records(leaf.samples);
-            leaf.sampling = leaf.building.clone();
+            leaf.sampling = leaf.building.compensated();
         });
         let threshold = SPATIAL_THRESHOLD * (paths as f64 / REFERENCE_PATHS).sqrt();
         // split leaves breadth-first by index order (deterministic); a split leaf's halves each
@@ -207,8 +210,8 @@ impl SdTree {
             n += 1;
         }
         self.leaves.par_iter_mut().for_each(|leaf| {
-            leaf.building = leaf.sampling.refined(ENERGY_FRACTION);
-            leaf.alpha = leaf.fraction.alpha();
+            leaf.building = leaf.building.refined(ENERGY_FRACTION);
+            leaf.alpha = leaf.fraction.alpha().min(MAX_GUIDE_FRACTION);
             leaf.samples = 0;
         });
     }
