@@ -347,7 +347,7 @@ impl DTree {
     /// mean density, so the guide spends its samples where the radiance is above average and
     /// the defensive strategy covers the rest. A tree with nothing above its mean (uniform, or
     /// empty) is returned as it is. `∫ L_i dω` ([`DTree::radiance`]) stays the learned one.
-    pub(super) fn compensated(&self) -> DTree {
+    pub fn compensated(&self) -> DTree {
         let mut t = self.clone();
         let mean = self.total;
         t.map_leaves(|s, a| (s - mean * a).max(0.0));
