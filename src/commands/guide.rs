@@ -6,10 +6,10 @@
 //! cylindrical equal-area map (`cosθ` from world +z down the rows, from +1 at the top, and `φ`
 //! about +z along the columns, so that equal areas are equal solid angles):
 //!
-//! - **learned**: the density of the radiance the guide learned at `x` (its leaf's quadtree),
-//!   per unit area of the map; the guide samples it less its mean (MIS compensation), so where
-//!   it is below its mean the map shows it flat, at the mean
-//!   ([`crate::guiding::DTree::learned_density`]);
+//! - **learned**: the density the guide samples at `x` (its leaf's quadtree), per unit area of
+//!   the map: the radiance it learned less its mean, clamped at zero (MIS compensation,
+//!   [`crate::guiding::DTree::compensated`]), so what lies below the mean is not drawn (the
+//!   BSDF's own samples cover it);
 //! - **incident**: the radiance arriving at `x` from each direction, by brute force: every texel
 //!   the mean of `brute_spp` paths (`stratified+phong+mis`) from `x` through jittered directions
 //!   of the texel, zero below the surface; normalized to a density like the other map.
@@ -138,18 +138,12 @@ pub fn run(req: &GuideRequest) -> Result<GuideOutcome> {
     let (point, n) = first_hit(&scene, &settings, req.pixel)?;
     let dtree = tree.sampling(tree.leaf_at(point));
     let (w, h) = (req.map_width, req.map_width / 2);
-    // the radiance the leaf learned, not the compensated density it samples (which is zero
-    // below the mean): exact above the mean, flat at it below, normalised again to mean 1
-    let mut learned: Vec<f64> = (0..w * h)
+    let learned: Vec<f64> = (0..w * h)
         .map(|k| {
             let (i, j) = ((k % w) as f32 + 0.5, (k / w) as f32 + 0.5);
-            dtree.learned_density(dtree.pdf_canonical(canonical(i, j, (w, h)))) as f64
+            dtree.pdf_canonical(canonical(i, j, (w, h))) as f64
         })
         .collect();
-    let mean = learned.iter().sum::<f64>() / learned.len() as f64;
-    if mean > 0.0 {
-        learned.iter_mut().for_each(|v| *v /= mean);
-    }
     let origin = point + n * scene.ray_epsilon;
     let mut incident = crate::render::with_threads(req.threads, || {
         incident_radiance(&scene, &settings, req, (origin, n))
@@ -159,10 +153,7 @@ pub fn run(req: &GuideRequest) -> Result<GuideOutcome> {
         &req.output,
         (&learned, &incident),
         (w, h),
-        (
-            "learned guide (density; flat below its mean)",
-            "incident radiance, brute force",
-        ),
+        ("guide, as it samples", "incident radiance, brute force"),
         "density per unit area of the equal-area map, log scale",
     )?;
     Ok(GuideOutcome {
