@@ -47,8 +47,8 @@ pub struct DTree {
     /// `radiance · pdf(ω)` estimates the radiance arriving from `ω`.
     radiance: f32,
     /// How the sampling density maps back to the learned one ([`DTree::learned_density`]):
-    /// 1 and 0 for an uncompensated tree; for a compensated one the uncompensated total over
-    /// the compensated one's, and 1 (the mean density).
+    /// 1 and 0 for an uncompensated tree; for a compensated one its total over the learned
+    /// tree's, and 1 (the mean density).
     scale: f32,
     floor: f32,
 }
