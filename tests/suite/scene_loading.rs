@@ -242,6 +242,14 @@ fn shipped_scenes_load() {
         assert!(!s.lights.is_empty(), "{name} has emitters");
         assert!(s.warnings.is_empty(), "{name}: {:?}", s.warnings);
     }
+    // the lamp's one light sits inside a closed glass shade (12 quads: two nested boxes)
+    let lamp = common::shipped("lamp");
+    assert!(lamp.warnings.is_empty(), "lamp: {:?}", lamp.warnings);
+    assert_eq!(lamp.lights.emitters.len(), 1);
+    let glass = (lamp.shading.iter())
+        .filter(|t| lamp.materials[t.material as usize].specular.is_some())
+        .count();
+    assert_eq!(glass, 24);
     let cb = common::shipped("cornell-box");
     assert_eq!(cb.triangle_count(), 32);
     assert_eq!(cb.defaults.spp, Some(64));
