@@ -202,13 +202,15 @@ pub struct GuideAt<'a> {
     pub alpha: f32,
     /// The tree.
     pub tree: &'a SdTree,
+    /// The leaf box's edges (world units), for [`Self::splat_leaf`].
+    pub extent: Vec3,
 }
 
 impl<'a> GuideAt<'a> {
     /// The guide at point `p` of `tree`.
     #[inline]
     pub fn new(tree: &'a SdTree, p: Vec3) -> Self {
-        let leaf = tree.leaf_at(p);
+        let (leaf, extent) = tree.leaf_and_extent(p);
         let dtree = tree.sampling(leaf);
         // a leaf that has learned nothing does not guide (its α would sample the sphere)
         let alpha = if dtree.total() > 0.0 {
@@ -221,6 +223,7 @@ impl<'a> GuideAt<'a> {
             dtree,
             alpha,
             tree,
+            extent,
         }
     }
 
@@ -270,10 +273,12 @@ impl<'a> GuideAt<'a> {
     }
 
     /// The leaf a training record at `p` is splatted into, `jitter` in `[0, 1)³` spreading it
-    /// over a box the size of its leaf ([`SdTree::splat_leaf`]).
+    /// over a box the size of its leaf ([`SdTree::splat_leaf`]); `p` is the point this guide
+    /// was looked up at, whose leaf's extent it kept (one descent of the S-tree, not two).
     #[inline]
     pub fn splat_leaf(&self, p: Vec3, jitter: Vec3) -> u32 {
-        self.tree.splat_leaf(p, jitter)
+        self.tree
+            .leaf_at(p + (jitter - Vec3::splat(0.5)) * self.extent)
     }
 
     /// A density per unit area of the canonical square, per unit solid angle: `1/4π`.
