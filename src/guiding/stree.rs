@@ -154,7 +154,7 @@ impl SdTree {
     /// the half a point lies in at depth `d` is the next binary digit of its coordinate along
     /// axis `d mod 3`: the descent reads the digits from one 63-bit Morton code of the first 21
     /// digits of each coordinate (the digits the two-branch form `q ≥ ½`, `q ← 2q − (q ≥ ½)`
-    /// read, exactly; below depth 63 it goes on so), and starts at depth [`TOP_BITS`] from the
+    /// read, exactly; below depth 63 it goes on so), and starts at depth 12 (`TOP_BITS`) from the
     /// `top` table. A level is then a node load and a shift: the descent was 10–14% of a guided
     /// render's profile on the door (21 levels deep at 900 leaves), a float coordinate per level
     /// carried through memory and a branch on a coin flip.
