@@ -453,7 +453,7 @@ ADAPTIVE_TARGETS = ([("glossy-plates", None, None, 3, 1.2), ("glossy-plates", No
 
 
 AUTO_SCENES = ["cornell-box", "glossy-plates", "lit-checker", "checker-plane", "night-hall", "door", "door-dark",
-               "gap", "sun-sky", "textured", "glass"]
+               "gap", "sun-sky", "textured", "glass", "lamp"]
 
 
 @section("reuse")
