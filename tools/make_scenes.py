@@ -1173,23 +1173,16 @@ def icosphere(level):
 
 
 # ================================================================ glass
-def glass():
-    """A box of diffuse walls lit by a small ceiling light, with a smooth glass
-    sphere (index 1.5) that throws a caustic onto the floor, and a mirror on
-    the left wall (MTL illum 7 with Tf and Ni, and illum 3): the scene of smooth
-    dielectrics and mirrors, whose caustic only BSDF-sampled paths find."""
-    name = "glass"
-    m = Mesh(name)
-    white = (0.75, 0.75, 0.75)
-    m.material("white", white)
+def glass_room_materials(m):
+    """The white, red and green walls' materials of the glass and lamp scenes."""
+    m.material("white", (0.75, 0.75, 0.75))
     m.material("red", (0.63, 0.065, 0.05))
     m.material("green", (0.14, 0.45, 0.091))
-    m.material("light", (0.0, 0.0, 0.0), ke=(20.0, 18.0, 14.0))
-    # Tf is 1 - transmission (3ds Max's convention, the Cornell box files')
-    m.material("glass", (0.0, 0.0, 0.0),
-               maps=["Ni 1.5", "Tf 0 0 0", "illum 7"])
-    m.material("mirror", (0.0, 0.0, 0.0), ks=(0.9, 0.9, 0.9),
-               maps=["illum 3"])
+
+
+def glass_room_walls(m):
+    """The glass and lamp scenes' room: a 2 m box from y = 0 to 2, open at
+    z = +1 toward the camera, red on the left, green on the right."""
     centre = (0.0, 1.0, 0.0)
     m.group("floor", "white")
     m.face([(-1, 0, -1), (1, 0, -1), (1, 0, 1), (-1, 0, 1)], toward=centre)
@@ -1201,6 +1194,23 @@ def glass():
     m.face([(-1, 0, -1), (-1, 0, 1), (-1, 2, 1), (-1, 2, -1)], toward=centre)
     m.group("right", "green")
     m.face([(1, 0, -1), (1, 0, 1), (1, 2, 1), (1, 2, -1)], toward=centre)
+
+
+def glass():
+    """A box of diffuse walls lit by a small ceiling light, with a smooth glass
+    sphere (index 1.5) that throws a caustic onto the floor, and a mirror on
+    the left wall (MTL illum 7 with Tf and Ni, and illum 3): the scene of smooth
+    dielectrics and mirrors, whose caustic only BSDF-sampled paths find."""
+    name = "glass"
+    m = Mesh(name)
+    glass_room_materials(m)
+    m.material("light", (0.0, 0.0, 0.0), ke=(20.0, 18.0, 14.0))
+    # Tf is 1 - transmission (3ds Max's convention, the Cornell box files')
+    m.material("glass", (0.0, 0.0, 0.0),
+               maps=["Ni 1.5", "Tf 0 0 0", "illum 7"])
+    m.material("mirror", (0.0, 0.0, 0.0), ks=(0.9, 0.9, 0.9),
+               maps=["illum 3"])
+    glass_room_walls(m)
     m.group("light", "light")
     m.face([(-0.2, 1.99, -0.2), (0.2, 1.99, -0.2), (0.2, 1.99, 0.2),
             (-0.2, 1.99, 0.2)], direction=(0, -1, 0))
@@ -1231,24 +1241,11 @@ def lamp():
     lamp's direction.  Path guiding's caustic scene."""
     name = "lamp"
     m = Mesh(name)
-    white = (0.75, 0.75, 0.75)
-    m.material("white", white)
-    m.material("red", (0.63, 0.065, 0.05))
-    m.material("green", (0.14, 0.45, 0.091))
+    glass_room_materials(m)
     m.material("light", (0.0, 0.0, 0.0), ke=(25.0, 22.5, 17.5))
     m.material("glass", (0.0, 0.0, 0.0),
                maps=["Ni 1.5", "Tf 0 0 0", "illum 7"])
-    centre = (0.0, 1.0, 0.0)
-    m.group("floor", "white")
-    m.face([(-1, 0, -1), (1, 0, -1), (1, 0, 1), (-1, 0, 1)], toward=centre)
-    m.group("ceiling", "white")
-    m.face([(-1, 2, -1), (1, 2, -1), (1, 2, 1), (-1, 2, 1)], toward=centre)
-    m.group("back", "white")
-    m.face([(-1, 0, -1), (1, 0, -1), (1, 2, -1), (-1, 2, -1)], toward=centre)
-    m.group("left", "red")
-    m.face([(-1, 0, -1), (-1, 0, 1), (-1, 2, 1), (-1, 2, -1)], toward=centre)
-    m.group("right", "green")
-    m.face([(1, 0, -1), (1, 0, 1), (1, 2, 1), (1, 2, -1)], toward=centre)
+    glass_room_walls(m)
 
     def cuboid(lo, hi, outward):
         """The six faces of an axis-aligned box, their normals pointing out

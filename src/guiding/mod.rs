@@ -278,8 +278,7 @@ impl<'a> GuideAt<'a> {
     /// was looked up at, whose leaf's extent it kept (one descent of the S-tree, not two).
     #[inline]
     pub fn splat_leaf(&self, p: Vec3, jitter: Vec3) -> u32 {
-        self.tree
-            .leaf_at(p + (jitter - Vec3::splat(0.5)) * self.extent)
+        self.tree.splat_leaf(p, self.extent, jitter)
     }
 
     /// A density per unit area of the canonical square, per unit solid angle: `1/4π`.

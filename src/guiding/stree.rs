@@ -218,12 +218,12 @@ impl SdTree {
     }
 
     /// The leaf a record made at `p` goes to, by the stochastic box filter of Müller et al.'s
-    /// code: `p` moved by `(u − ½) ⊙ extent`, the extent of `p`'s own leaf, so a record
-    /// teaches the leaves within one leaf size of where it was made, each in proportion to
-    /// the overlap (on average), and neighbouring leaves learn alike.
+    /// code: `p` moved by `(u − ½) ⊙ extent`, `extent` the edges of `p`'s own leaf (as
+    /// [`Self::leaf_and_extent`] gives them; a caller that looked `p` up already passes them
+    /// on), so a record teaches the leaves within one leaf size of where it was made, each in
+    /// proportion to the overlap (on average), and neighbouring leaves learn alike.
     #[inline]
-    pub fn splat_leaf(&self, p: Vec3, u: Vec3) -> u32 {
-        let extent = self.leaf_and_extent(p).1;
+    pub fn splat_leaf(&self, p: Vec3, extent: Vec3, u: Vec3) -> u32 {
         self.leaf_at(p + (u - Vec3::splat(0.5)) * extent)
     }
 
