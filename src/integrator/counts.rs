@@ -1,5 +1,6 @@
-//! What a render counts of its rays and, under `--stats`, of its time: [`RayCounts`] by kind,
-//! one traversal in [`TIMED_RAY_EVERY`] timed, and one path sample in [`TIMED_PATH_EVERY`]
+//! What a render counts of its rays, of the light its paths carried (all of it, and the part
+//! that came through a delta vertex after a Phong one: [`RayCounts::caustic_share`]) and, under
+//! `--stats`, of its time: [`RayCounts`] by kind, one traversal in [`TIMED_RAY_EVERY`] timed, and one path sample in [`TIMED_PATH_EVERY`]
 //! timed phase by phase ([`Phase`]), the clock's own cost measured by [`clock_overhead_ns`].
 
 /// The parts a path sample's cost is split into when it is timed phase by phase
@@ -40,8 +41,8 @@ pub const PHASE_NAMES: [&str; PHASES] = [
 /// read the sampler at 1.7 µs a sample.
 pub const TIMED_PATH_EVERY: u64 = 61;
 
-/// Rays traced, by kind.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+/// Rays traced, by kind, and the light the paths carried.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct RayCounts {
     pub camera: u64,
     /// Rays continuing a path after a bounce.
@@ -50,6 +51,15 @@ pub struct RayCounts {
     pub shadow: u64,
     /// Path reuse's connections (their shadow rays, also counted in `shadow`).
     pub connection: u64,
+    /// The luminance of every path estimate the path tracer returned, summed (a reused path's
+    /// continuation counted as traced). Each tile counts its own, and a render sums its tiles
+    /// in their order, so the sum is the same on any number of threads. Not counted by
+    /// `--roulette ears`'s branching paths.
+    pub light: f64,
+    /// The part of [`RayCounts::light`] a path found as emission through a delta vertex (a
+    /// mirror or glass) after a Phong vertex: a caustic, light no light sample can reach and only
+    /// a bounce from the Phong vertex before it finds, which is what a guide learns to aim.
+    pub caustic: f64,
     /// Nanoseconds spent in the timed traversals, when [`super::IntegratorSettings::time_traces`]
     /// is on.
     pub trace_ns: u64,
@@ -73,12 +83,23 @@ impl RayCounts {
         self.camera + self.bounce + self.shadow
     }
 
+    /// The share of the light the paths carried that was caustic ([`RayCounts::caustic`]); 0
+    /// where they carried none.
+    pub fn caustic_share(&self) -> f64 {
+        match self.light > 0.0 {
+            true => (self.caustic / self.light).clamp(0.0, 1.0),
+            false => 0.0,
+        }
+    }
+
     /// Add `o`'s counts.
     pub fn add(&mut self, o: &RayCounts) {
         self.camera += o.camera;
         self.bounce += o.bounce;
         self.shadow += o.shadow;
         self.connection += o.connection;
+        self.light += o.light;
+        self.caustic += o.caustic;
         self.trace_ns += o.trace_ns;
         self.timed += o.timed;
         for k in 0..PHASES {

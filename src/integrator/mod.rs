@@ -61,7 +61,7 @@ use crate::accel::TraceStack;
 use crate::bsdf::{Bsdf, Directions, Specular};
 use crate::guiding::{Guide, GuideAt, Record};
 use crate::lights::{LightChoice, LightPoints, LightSampler, LightStrategy};
-use crate::math::Frame;
+use crate::math::{luminance, Frame};
 use crate::sampler::layout::BounceSample;
 use crate::sampler::Sampler;
 use crate::scene::{Scene, SurfacePoint};
@@ -340,19 +340,21 @@ impl<'a> Path<'a> {
             reusing: false,
             prev: None,
         };
+        // whether a Phong vertex came before: emission then reached through a delta lobe is a
+        // caustic ([`RayCounts::caustic`])
+        let mut phong_before = false;
         for segment in 1..=settings.max_depth {
-            let (t, s, wo, front) = match self.reach(st.prev, (origin, dir), rays, stack) {
-                Reached::Escaped(le, w) => {
-                    st.l += st.beta * le * w;
-                    break;
-                }
-                Reached::Surface(at, emitted) => {
-                    if let Some((le, w)) = emitted {
-                        st.l += st.beta * le * w;
-                    }
-                    at
-                }
+            let caustic = phong_before && st.prev.is_some_and(|p| p.delta);
+            let (at, found) = match self.reach(st.prev, (origin, dir), rays, stack) {
+                Reached::Escaped(le, w) => (None, st.beta * le * w),
+                Reached::Surface(at, Some((le, w))) => (Some(at), st.beta * le * w),
+                Reached::Surface(at, None) => (Some(at), Vec3::ZERO),
             };
+            st.l += found;
+            if caustic {
+                rays.caustic += luminance(found) as f64;
+            }
+            let Some((t, s, wo, front)) = at else { break };
             if segment == settings.max_depth {
                 rays.mark(Phase::Shade);
                 break;
@@ -371,6 +373,7 @@ impl<'a> Path<'a> {
                 if bsdf.is_black() {
                     break;
                 }
+                phong_before = true;
                 let at = (segment, &s, front, wo, t);
                 let (rec, split) = (rec.as_deref_mut(), split.as_deref_mut());
                 self.surface_vertex(at, &bsdf, sampler, rays, stack, rec, split, &mut st)
@@ -378,6 +381,7 @@ impl<'a> Path<'a> {
             let Some((ray, p)) = next else { break };
             ((origin, dir), st.prev) = (ray, Some(p));
         }
+        rays.light += luminance(st.l) as f64;
         if let Some(rec) = rec {
             rec.finish(st.l);
         }

@@ -237,10 +237,18 @@ impl RenderStats {
             0 => String::new(),
             n => format!(", {n} of them reuse connections"),
         };
+        // the light through a mirror or glass after a Phong vertex, where there was any
+        let caustic = match self.rays.caustic > 0.0 {
+            true => format!(
+                "; {:.1}% of the light caustic",
+                100.0 * self.rays.caustic_share()
+            ),
+            false => String::new(),
+        };
         format!(
             "{}: {} triangles, BVH built in {:.1} ms ({:.1} KiB){textures}\n\
              rendered {}x{} at {} spp ({}{reuse}, max depth {}) in {:.3} s: {:.3} M samples/s, {:.2} Mrays/s\n\
-             rays: {} ({} camera, {} bounce, {} shadow{connections}; {:.2} per sample)\n",
+             rays: {} ({} camera, {} bounce, {} shadow{connections}; {:.2} per sample{caustic})\n",
             scene.source.display(),
             scene.triangle_count(),
             scene.accel.build_time.as_secs_f64() * 1e3,

@@ -9,7 +9,10 @@ use vrpt::commands::render::{RenderOutcome, RenderRequest};
 use vrpt::render::NoProgress;
 
 fn render(args: &[&str]) -> RenderOutcome {
-    let scene = common::cornell_path();
+    render_scene(&common::cornell_path(), args)
+}
+
+fn render_scene(scene: &std::path::Path, args: &[&str]) -> RenderOutcome {
     let mut all = vec![scene.to_str().unwrap()];
     all.extend_from_slice(args);
     let flags: Vec<String> = all.iter().map(|s| s.to_string()).collect();
@@ -115,6 +118,9 @@ fn auto_pilots_a_guided_candidate_only_where_an_unguided_one_won() {
         assert_eq!(choice.unpiloted[0].to_string(), guided);
         assert!(choice.guide.is_none());
         assert!(choice.table().contains(&format!("{guided}: not piloted")));
+        // no mirror or glass, no caustic: the other gate stays shut too
+        assert_eq!(choice.caustic, 0.0);
+        assert!(choice.table().contains("0% of mis's light caustic"));
         let record = kept.meta.auto.as_deref().unwrap();
         assert!(
             record.contains(&format!("(not piloted: {guided})")),
@@ -134,6 +140,85 @@ fn auto_pilots_a_guided_candidate_only_where_an_unguided_one_won() {
         .map(|c| c.to_string())
         .collect();
     assert_eq!(d, ["mis", "mis+reuse4", "stratified+guided+mis+reuse4"]);
+}
+
+/// Light a path finds through a mirror or glass after a Phong vertex is counted as caustic
+/// (what opens auto's guided pilots, [`CAUSTIC_GATE`]): none at all on the Cornell box (no
+/// mirror or glass); all of it where the camera sees only the lamp scene's floor, lit through the
+/// glass shade around its lamp (every light path ends floor, …, glass, lamp: the luminance summed
+/// per emission found equals the luminance summed per path but for f32 rounding, ~1e-7 per
+/// path); and from the lamp scene's own camera a part, at least the gate's quarter (54% at 128²,
+/// 16 spp; at 32² its noise is a few percent), and not all: that camera also sees the lamp
+/// through the shade, which is no caustic (no Phong vertex before the glass).
+#[test]
+fn caustic_light_is_counted_where_it_comes_through_glass() {
+    use vrpt::render::{auto::CAUSTIC_GATE, RenderSettings};
+    use vrpt::scene::Scene;
+    let rays = |scene: &Scene| {
+        let settings = RenderSettings {
+            width: 32,
+            height: 32,
+            spp: 16,
+            max_depth: 12,
+            seed: common::seed(7),
+            ..RenderSettings::for_scene(scene)
+        };
+        common::render_quiet(scene, &settings).1.rays
+    };
+    let cornell = rays(&common::shipped("cornell-box"));
+    assert!(cornell.light > 0.0);
+    assert_eq!((cornell.caustic, cornell.caustic_share()), (0.0, 0.0));
+
+    let lamp = rays(&common::shipped("lamp"));
+    let share = lamp.caustic_share();
+    assert!((CAUSTIC_GATE..0.9).contains(&share), "{share}");
+
+    let dir = tempfile::tempdir().unwrap();
+    for f in ["lamp.obj", "lamp.mtl"] {
+        std::fs::copy(common::shipped_path("lamp").join(f), dir.path().join(f)).unwrap();
+    }
+    // straight down at the floor from below the shade: floor only
+    let toml = "obj = \"lamp.obj\"\n[camera]\neye = [0, 1.5, 0.9]\ntarget = [0, 0, 0.9]\n\
+                up = [0, 0, -1]\nfov = 20\n[environment]\nradiance = [0, 0, 0]\n";
+    common::write(dir.path(), "scene.toml", toml);
+    let floor = rays(&vrpt::scene::load(dir.path()).unwrap());
+    assert!(floor.light > 0.0);
+    assert!(
+        (floor.caustic / floor.light - 1.0).abs() < 1e-5,
+        "{floor:?}"
+    );
+}
+
+/// Where a quarter or more of the first candidate's pilot's light is caustic ([`CAUSTIC_GATE`]),
+/// the guided candidates are piloted even though no unguided one beat the first: on the lamp
+/// behind its glass shade, with `independent` as the unguided one besides mis (which it does not
+/// beat), the guided candidate is piloted all the same and the table says why.
+#[test]
+fn auto_pilots_a_guided_candidate_where_the_light_is_caustic() {
+    use vrpt::render::auto::CAUSTIC_GATE;
+    let lamp = common::shipped_path("lamp");
+    let guided = "stratified+guided+mis";
+    let size = ["--width", "32", "--height", "32", "--spp", "64"];
+    let seed = common::seed(43).to_string();
+    let args = ["--seed", &seed, "--strategy", "auto", "--auto-candidates"];
+    let out = render_scene(
+        &lamp,
+        &[&size[..], &args, &[&format!("mis,independent,{guided}")]].concat(),
+    );
+    let choice = out.auto.as_ref().expect("the pilots' choice");
+    let names: Vec<String> = (choice.rows.iter())
+        .map(|r| r.candidate.to_string())
+        .collect();
+    assert_eq!(names, ["mis", "independent", guided], "{}", choice.table());
+    assert!(choice.unpiloted.is_empty());
+    assert!(choice.caustic >= CAUSTIC_GATE, "{}", choice.table());
+    assert!(
+        choice.table().contains("guided candidates piloted: "),
+        "{}",
+        choice.table()
+    );
+    let record = out.meta.auto.as_deref().unwrap();
+    assert!(record.contains("; caustic 0."), "{record}");
 }
 
 /// Path reuse as a candidate: whichever the pilots choose, the image is that candidate's own

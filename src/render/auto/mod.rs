@@ -62,9 +62,11 @@
 //! same reason: the guide and the choice come from samples independent of the image's.
 //!
 //! Guided candidates (but a guided first one) are piloted only where an unguided candidate
-//! other than the first beat it beyond the noise, or where the list names no unguided one
-//! but the first: the unguided candidates are piloted first, and a guided one's guide is
-//! trained and piloted only where they switched. The default candidates ([`default_candidates`])
+//! other than the first beat it beyond the noise, where at least [`CAUSTIC_GATE`] of the first
+//! candidate's pilot's light came as caustics (through a mirror or glass after a Phong vertex:
+//! light only a bounce finds, which a guide learns to aim at), or where the list names no
+//! unguided one but the first: the unguided candidates are piloted first, and a guided one's
+//! guide is trained and piloted only where they switched or the caustics call for it. The default candidates ([`default_candidates`])
 //! add guided directions to path reuse that way: where reuse beats mis the light comes by
 //! indirect paths, which is where a guide learns something, and on the rooms lit through a door
 //! at 10 s the guided and reusing candidate was chosen in every render and gained 6.8–7.8× over
@@ -244,7 +246,7 @@ pub const AUTO_REUSE: u32 = 4;
 /// The candidates when none are named: today's default (stratified points, Phong directions,
 /// MIS), the same with path reuse in blocks of [`AUTO_REUSE`]², and that with guided directions
 /// too, which is piloted (its guide trained first) only where path reuse beat mis in its pilot
-/// (the module doc): on the rooms lit through a door or a slit, guiding and reuse together gain
+/// or the light is caustic (the module doc): on the rooms lit through a door or a slit, guiding and reuse together gain
 /// 2× over reuse alone at 10 s, and where reuse does not win neither does the guide, whose
 /// training would cost those renders an eighth of their time (`docs/performance.md`).
 pub fn default_candidates() -> Vec<Candidate> {
@@ -309,13 +311,16 @@ pub struct Choice {
     /// The candidates' pilots: the unguided candidates' in the order given, then the guided
     /// ones' (but a guided first candidate's, which comes first) when they were piloted.
     pub rows: Vec<PilotRow>,
-    /// The guided candidates not piloted, since no unguided candidate beat the first (the
-    /// module doc).
+    /// The guided candidates not piloted, since no unguided candidate beat the first and too
+    /// little of the first's light was caustic (the module doc).
     pub unpiloted: Vec<Candidate>,
     /// What the costs count.
     pub cost: Cost,
     /// `z` of the most efficient candidate against the first (0 when it is the first).
     pub z: f64,
+    /// The share of the first candidate's pilot's light that was caustic
+    /// ([`crate::integrator::RayCounts::caustic_share`]; see [`CAUSTIC_GATE`]).
+    pub caustic: f64,
     /// Wall time of all the pilots.
     pub elapsed: Duration,
     /// The tiles the pilots rendered, and the image's (partial ones included).
@@ -324,6 +329,20 @@ pub struct Choice {
     /// render samples with it ([`PassPlan::guide`]).
     pub guide: Option<Arc<LearnedGuide>>,
 }
+
+/// The share of the first candidate's pilot's light that came as caustics (through a mirror or
+/// glass after a Phong vertex: [`crate::integrator::RayCounts::caustic_share`]) at or above which
+/// the guided candidates are piloted even where no unguided candidate beat the first (the module
+/// doc). Caustics are light no light sample reaches, which only a bounce aimed at the mirror or
+/// glass finds, and path reuse does not help there; a guide learns to aim. Measured with
+/// `vrpt render SCENE --spp 16` (the share is printed with the rays): the lamp behind its glass
+/// shade 54% (the rest is the lamp seen through the shade from the camera, not a caustic),
+/// the glass scene 9%, every other shipped scene 0 (no mirror or glass). At 10 s on the lamp
+/// a guided render is 1.9× as efficient as mis, and auto, which did not pilot it (path reuse does
+/// not beat mis there), reached 0.59× of it; on the glass scene guided directions gain 1.3×,
+/// which a guided pilot without reuse did not see (0.35–1.16× the efficiency of mis on the gap,
+/// door-dark and glass). A quarter lies between the two measured shares.
+pub const CAUSTIC_GATE: f64 = 0.25;
 
 /// The share of the render's budget a guided candidate's guide trains on, before its pilot: its
 /// training iterations ([`crate::guiding`]) on the pilots' strip take at most this share of the
@@ -424,8 +443,8 @@ pub fn choose(
         }
     };
     // the unguided candidates first; the guided ones (but a guided first) only where one of
-    // those beat the first beyond the noise, or where no unguided one but the first is listed
-    // (the module doc)
+    // those beat the first beyond the noise, where the first's light is caustic enough, or where
+    // no unguided one but the first is listed (the module doc)
     let n = candidates.len();
     let guided = |k: usize| k > 0 && candidates[k].strategy.directions == Directions::Guided;
     let staged = (1..n).any(|k| !guided(k)) && (1..n).any(guided);
@@ -434,7 +453,10 @@ pub fn choose(
         .iter()
         .map(|&k| pilots.run(k, spp))
         .collect::<Result<Vec<_>>>()?;
-    if staged && decide(&shared_denominator(pilots.width, &done)).0 != 0 {
+    let caustic = done.first().map_or(0.0, |p| p.caustic);
+    if staged
+        && (caustic >= CAUSTIC_GATE || decide(&shared_denominator(pilots.width, &done)).0 != 0)
+    {
         for k in (1..n).filter(|&k| guided(k)) {
             done.push(pilots.run(k, spp)?);
             ks.push(k);
@@ -452,6 +474,7 @@ pub fn choose(
             .collect(),
         cost,
         z,
+        caustic,
         elapsed: start.elapsed(),
         tiles: pilots.tiles,
         guide: pilots.guides[ks[index]].take(),
@@ -519,11 +542,18 @@ impl Choice {
             .rows
             .first()
             .map_or(String::new(), |r| r.candidate.to_string());
+        let caustic = format!(
+            "{:.0}% of {first}'s light caustic, gate {:.0}%",
+            100.0 * self.caustic,
+            100.0 * CAUSTIC_GATE
+        );
         if !self.unpiloted.is_empty() {
             s += &format!(
-                "  {}: not piloted (guided, and no unguided candidate beat {first})\n",
+                "  {}: not piloted (guided, no unguided candidate beat {first}, {caustic})\n",
                 self.unpiloted_names()
             );
+        } else if self.caustic >= CAUSTIC_GATE {
+            s += &format!("  guided candidates piloted: {caustic}\n");
         }
         s + &format!(
             "  efficiency relative to {first}; the best against it: z = {:.1} (switch above {SWITCH_Z}){}\n",
@@ -570,10 +600,11 @@ impl Choice {
             false => format!(" (not piloted: {})", self.unpiloted_names()),
         };
         format!(
-            "chose {}; efficiency {}{unpiloted}; z {:.2}; pilots {} spp on {} of {} tiles, cost {}",
+            "chose {}; efficiency {}{unpiloted}; z {:.2}; caustic {:.3}; pilots {} spp on {} of {} tiles, cost {}",
             self.candidate,
             rows.join(", "),
             self.z,
+            self.caustic,
             self.rows.first().map_or(0, |r| r.spp),
             self.tiles.0,
             self.tiles.1,

@@ -114,6 +114,8 @@ pub(super) struct Pilot {
     pub(super) seconds: f64,
     pub(super) mean: Vec<glam::Vec3>,
     pub(super) variance: Vec<glam::Vec3>,
+    /// The share of its paths' light that was caustic ([`crate::integrator::RayCounts::caustic_share`]).
+    pub(super) caustic: f64,
 }
 
 /// The pilots' rows, every relMSE measured against one denominator ([`rel_mse_against`]): the
@@ -199,5 +201,6 @@ fn pilot_of(candidate: Candidate, r: Rendered, cost: Cost) -> Pilot {
         seconds,
         mean: r.film.mean_image(),
         variance: r.estimate.variance,
+        caustic: rays.caustic_share(),
     }
 }

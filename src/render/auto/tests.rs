@@ -131,6 +131,7 @@ fn pilot(mean: f32, variance: f32, pixels: usize, cost: f64) -> Pilot {
         seconds: 0.1,
         mean: vec![glam::Vec3::splat(mean); pixels],
         variance: vec![glam::Vec3::splat(variance); pixels],
+        caustic: 0.0,
     }
 }
 
