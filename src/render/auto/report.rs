@@ -1,0 +1,123 @@
+//! What `--strategy auto` tells: the pilots' table for the terminal and `--stats`, and the line
+//! of the EXR's metadata.
+
+use super::*;
+
+impl Choice {
+    /// The pilots as a table, and the choice, for the terminal.
+    pub fn table(&self) -> String {
+        let unit = match self.cost {
+            Cost::Rays => "Mrays",
+            Cost::Seconds => "seconds",
+        };
+        let scale = match self.cost {
+            Cost::Rays => 1e-6,
+            Cost::Seconds => 1.0,
+        };
+        let w = (self.rows.iter())
+            .map(|r| r.candidate.to_string().len())
+            .max()
+            .unwrap_or(8)
+            .max(8);
+        let mut s = format!(
+            "auto: pilots of {} spp ({} replicates) on {} of {} tiles in {:.2} s\n  {:w$}  {:>10}  {:>9}  {:>9}  {:>10}\n",
+            self.rows.first().map_or(0, |r| r.spp),
+            PILOT_REPLICATES,
+            self.tiles.0,
+            self.tiles.1,
+            self.elapsed.as_secs_f64(),
+            "strategy",
+            "relMSE",
+            "± se",
+            unit,
+            "efficiency",
+        );
+        let e0 = self.rows.first().map_or(f64::NAN, |r| r.efficiency);
+        for (k, r) in self.rows.iter().enumerate() {
+            let mark = if k == self.index { " <- chosen" } else { "" };
+            s += &format!(
+                "  {:w$}  {:>10.3e}  {:>9.1e}  {:>9.3}  {:>10.2}{mark}\n",
+                r.candidate.to_string(),
+                r.rel_mse,
+                r.rel_mse_se,
+                r.cost * scale,
+                r.efficiency / e0,
+            );
+        }
+        let first = self
+            .rows
+            .first()
+            .map_or(String::new(), |r| r.candidate.to_string());
+        let caustic = format!(
+            "{:.0}% of {first}'s light caustic, gate {:.0}%",
+            100.0 * self.caustic,
+            100.0 * CAUSTIC_GATE
+        );
+        if !self.unpiloted.is_empty() {
+            s += &format!(
+                "  {}: not piloted (guided, no unguided candidate beat {first}, {caustic})\n",
+                self.unpiloted_names()
+            );
+        } else if self.caustic >= CAUSTIC_GATE {
+            s += &format!("  guided candidates piloted: {caustic}\n");
+        }
+        s + &format!(
+            "  efficiency relative to {first}; the best against it: z = {:.1} (switch above {SWITCH_Z}){}\n",
+            self.z,
+            self.weights()
+        )
+    }
+
+    /// The guided candidates not piloted, comma-separated.
+    fn unpiloted_names(&self) -> String {
+        (self.unpiloted.iter())
+            .map(|c| c.to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+
+    /// What the table's rays weigh, when they are not all one: a reuse connection's shadow ray,
+    /// an EARS candidate's ray, a guided candidate's ray.
+    fn weights(&self) -> String {
+        let mut s = String::new();
+        if self.cost == Cost::Rays {
+            if self.rows.iter().any(|r| r.candidate.reuse > 1) {
+                s += &format!("; a reuse connection's ray counts {CONNECTION_COST}");
+            }
+            if (self.rows.iter()).any(|r| r.candidate.roulette == Roulette::Ears) {
+                s += &format!("; an EARS ray counts {EARS_RAY_COST}");
+            }
+            if (self.rows.iter()).any(|r| r.candidate.strategy.directions == Directions::Guided) {
+                s += &format!("; a guided ray counts {GUIDED_RAY_COST}");
+            }
+        }
+        s
+    }
+
+    /// One line for the metadata: the choice, each candidate's relative efficiency, z, the
+    /// pilots' spp and cost.
+    pub fn record(&self) -> String {
+        let e0 = self.rows.first().map_or(f64::NAN, |r| r.efficiency);
+        let rows: Vec<String> = (self.rows.iter())
+            .map(|r| format!("{} {:.3}", r.candidate, r.efficiency / e0))
+            .collect();
+        let unpiloted = match self.unpiloted.is_empty() {
+            true => String::new(),
+            false => format!(" (not piloted: {})", self.unpiloted_names()),
+        };
+        format!(
+            "chose {}; efficiency {}{unpiloted}; z {:.2}; caustic {:.3}; pilots {} spp on {} of {} tiles, cost {}",
+            self.candidate,
+            rows.join(", "),
+            self.z,
+            self.caustic,
+            self.rows.first().map_or(0, |r| r.spp),
+            self.tiles.0,
+            self.tiles.1,
+            match self.cost {
+                Cost::Rays => "rays",
+                Cost::Seconds => "seconds",
+            }
+        )
+    }
+}
