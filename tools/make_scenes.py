@@ -1173,11 +1173,16 @@ def icosphere(level):
 
 
 # ================================================================ glass
-def glass_room_materials(m):
-    """The white, red and green walls' materials of the glass and lamp scenes."""
+def glass_room_materials(m, light_ke):
+    """The materials the glass and lamp scenes share: the white, red and green
+    walls', the light's (emitting `light_ke`) and smooth glass of index 1.5."""
     m.material("white", (0.75, 0.75, 0.75))
     m.material("red", (0.63, 0.065, 0.05))
     m.material("green", (0.14, 0.45, 0.091))
+    m.material("light", (0.0, 0.0, 0.0), ke=light_ke)
+    # Tf is 1 - transmission (3ds Max's convention, the Cornell box files')
+    m.material("glass", (0.0, 0.0, 0.0),
+               maps=["Ni 1.5", "Tf 0 0 0", "illum 7"])
 
 
 def glass_room_walls(m):
@@ -1203,11 +1208,7 @@ def glass():
     dielectrics and mirrors, whose caustic only BSDF-sampled paths find."""
     name = "glass"
     m = Mesh(name)
-    glass_room_materials(m)
-    m.material("light", (0.0, 0.0, 0.0), ke=(20.0, 18.0, 14.0))
-    # Tf is 1 - transmission (3ds Max's convention, the Cornell box files')
-    m.material("glass", (0.0, 0.0, 0.0),
-               maps=["Ni 1.5", "Tf 0 0 0", "illum 7"])
+    glass_room_materials(m, light_ke=(20.0, 18.0, 14.0))
     m.material("mirror", (0.0, 0.0, 0.0), ks=(0.9, 0.9, 0.9),
                maps=["illum 3"])
     glass_room_walls(m)
@@ -1241,10 +1242,7 @@ def lamp():
     lamp's direction.  Path guiding's caustic scene."""
     name = "lamp"
     m = Mesh(name)
-    glass_room_materials(m)
-    m.material("light", (0.0, 0.0, 0.0), ke=(25.0, 22.5, 17.5))
-    m.material("glass", (0.0, 0.0, 0.0),
-               maps=["Ni 1.5", "Tf 0 0 0", "illum 7"])
+    glass_room_materials(m, light_ke=(25.0, 22.5, 17.5))
     glass_room_walls(m)
 
     def cuboid(lo, hi, outward):
