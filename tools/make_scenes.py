@@ -1185,6 +1185,16 @@ def glass_room_materials(m, light_ke):
                maps=["Ni 1.5", "Tf 0 0 0", "illum 7"])
 
 
+def write_glass_room(m, name, size):
+    """Write the glass or lamp scene `name` (mesh `m`): the same camera at the
+    room's open side, no environment, `size`² at 64 spp, depth 12."""
+    folder = os.path.join(SCENES, name)
+    m.write(folder)
+    write_toml(folder, name, eye=(0.0, 1.0, 3.9), target=(0.0, 1.0, 0.0),
+               fov=39.3, radiance=(0.0, 0.0, 0.0), width=size, height=size,
+               spp=64, max_depth=12)
+
+
 def glass_room_walls(m):
     """The glass and lamp scenes' room: a 2 m box from y = 0 to 2, open at
     z = +1 toward the camera, red on the left, green on the right."""
@@ -1225,11 +1235,7 @@ def glass():
     for f in faces:
         pts = [add(c, mul(verts[i], r)) for i in f]
         m.smooth_triangle(pts, [verts[i] for i in f])
-    folder = os.path.join(SCENES, name)
-    m.write(folder)
-    write_toml(folder, name, eye=(0.0, 1.0, 3.9), target=(0.0, 1.0, 0.0),
-               fov=39.3, radiance=(0.0, 0.0, 0.0), width=256, height=256,
-               spp=64, max_depth=12)
+    write_glass_room(m, name, size=256)
     return m
 
 
@@ -1276,11 +1282,7 @@ def lamp():
     m.group("light", "light")
     m.face([(-0.18, 1.9, -0.18), (0.18, 1.9, -0.18), (0.18, 1.9, 0.18),
             (-0.18, 1.9, 0.18)], direction=(0, -1, 0))
-    folder = os.path.join(SCENES, name)
-    m.write(folder)
-    write_toml(folder, name, eye=(0.0, 1.0, 3.9), target=(0.0, 1.0, 0.0),
-               fov=39.3, radiance=(0.0, 0.0, 0.0), width=128, height=128,
-               spp=64, max_depth=12)
+    write_glass_room(m, name, size=128)
     return m
 
 
