@@ -86,8 +86,8 @@ impl LightBounds {
 #[derive(Clone, Copy, Debug)]
 struct NodeBounds {
     centre: Vec3,
-    /// Squared radius of the box's bounding sphere.
-    radius2: f32,
+    /// Radius of the box's bounding sphere.
+    radius: f32,
     /// The floor of the squared distance: half the box's diagonal (pbrt-v4).
     min_d2: f32,
     w: Vec3,
@@ -102,7 +102,7 @@ impl NodeBounds {
         let diag = b.hi - b.lo;
         NodeBounds {
             centre: b.centroid(),
-            radius2: (0.5 * diag).length_squared(),
+            radius: (0.5 * diag).length(),
             min_d2: diag.length() / 2.0,
             w: b.w,
             phi: b.phi,
@@ -144,7 +144,7 @@ struct WideNode {
     cx: Vec4,
     cy: Vec4,
     cz: Vec4,
-    radius2: Vec4,
+    radius: Vec4,
     min_d2: Vec4,
     wx: Vec4,
     wy: Vec4,
@@ -167,7 +167,7 @@ impl WideNode {
         cx: Vec4::ZERO,
         cy: Vec4::ZERO,
         cz: Vec4::ZERO,
-        radius2: Vec4::ZERO,
+        radius: Vec4::ZERO,
         min_d2: Vec4::ONE,
         wx: Vec4::ZERO,
         wy: Vec4::ZERO,
@@ -185,7 +185,7 @@ impl WideNode {
         self.cx[i] = b.centre.x;
         self.cy[i] = b.centre.y;
         self.cz[i] = b.centre.z;
-        self.radius2[i] = b.radius2;
+        self.radius[i] = b.radius;
         self.min_d2[i] = b.min_d2;
         self.wx[i] = b.w.x;
         self.wy[i] = b.w.y;
@@ -197,12 +197,17 @@ impl WideNode {
     }
 
     /// The importance bound of each lane's emitters for a receiver at `p` with normal `n`
-    /// (pbrt-v4's `LightBounds::Importance`): `Φ cos θ′ / d²` with `θ′` the smallest angle
-    /// between the emitters' normals and the direction to `p` over the box's directions, zero
-    /// where `p` is outside every emission cone, times the receiver's smallest cosine toward the
-    /// box; angles subtracted as (sine, cosine) pairs, without trigonometry. The four lanes at
-    /// once, each the bits of the scalar formula (the tests keep it as the reference); 0 in
-    /// unused lanes.
+    /// (pbrt-v4's `LightBounds::Importance`): `Φ cos θ′ / max(d², min_d2)` with `θ′` the smallest
+    /// angle between the emitters' normals and the direction to `p` over the box's directions,
+    /// zero where `p` is outside every emission cone, times the receiver's smallest cosine toward
+    /// the box. The four lanes at once, each the bits of the scalar formula (the tests keep it as
+    /// the reference, and pbrt's angles beside it); 0 in unused lanes.
+    ///
+    /// No trigonometry, and no square root waits on another: with `v = p − centre` and `d = |v|`,
+    /// every angle is carried as the pair `(d cos θ, d sin θ)` of lengths, `(w·v, √(d² − (w·v)²))`
+    /// for the normals' axis, `(√(d² − r²), r)` for the cone of the box's bounding sphere (radius
+    /// `r`); a difference of two such angles, `d² cos(a − b) = A_c B_c + A_s B_s`, is a product of
+    /// two, and one reciprocal `1/d²` brings the two cosines of the bound back to numbers.
     #[inline(always)]
     fn importance(&self, p: Vec3, n: Vec3) -> Vec4 {
         #[inline(always)]
@@ -220,19 +225,6 @@ impl WideNode {
                 v.sqrt()
             }
         }
-        // cos(a − b) and sin(a − b), clamped at 0 when b ≥ a
-        #[inline(always)]
-        fn cos_sub(sin_a: Vec4, cos_a: Vec4, sin_b: Vec4, cos_b: Vec4) -> Vec4 {
-            Vec4::select(cos_a.cmpgt(cos_b), Vec4::ONE, cos_a * cos_b + sin_a * sin_b)
-        }
-        #[inline(always)]
-        fn sin_sub(sin_a: Vec4, cos_a: Vec4, sin_b: Vec4, cos_b: Vec4) -> Vec4 {
-            Vec4::select(
-                cos_a.cmpgt(cos_b),
-                Vec4::ZERO,
-                sin_a * cos_b - cos_a * sin_b,
-            )
-        }
         // max(x, 0) with a NaN x giving 0 (maxps returns its second operand then)
         #[inline(always)]
         fn pos(x: Vec4) -> Vec4 {
@@ -244,32 +236,37 @@ impl WideNode {
             Vec4::splat(p.z) - self.cz,
         );
         let dist2 = vx * vx + vy * vy + vz * vz;
-        let inv = sqrt(dist2).recip();
-        let (wix, wiy, wiz) = (vx * inv, vy * inv, vz * inv);
-        let far = dist2.cmpgt(Vec4::ZERO);
-        let cos_w = Vec4::select(
-            far,
-            self.wx * wix + self.wy * wiy + self.wz * wiz,
-            Vec4::ONE,
+        let d = sqrt(dist2);
+        // what the bound is where both cosines are 1 (θ′ = θ_i′ = 0)
+        let scale = self.phi / dist2.max(self.min_d2);
+        // θ_w, from the normals' axis to v
+        let wv = self.wx * vx + self.wy * vy + self.wz * vz;
+        let sw = sqrt(pos(dist2 - wv * wv));
+        // θ_b, the half-angle of the box's bounding sphere seen from p
+        let radius2 = self.radius * self.radius;
+        let cb = sqrt(pos(dist2 - radius2));
+        let sb = self.radius;
+        // θ_x = θ_w − θ_o, clamped at 0
+        let in_cone = wv.cmpgt(d * self.cos_theta_o);
+        let cx = Vec4::select(in_cone, d, wv * self.cos_theta_o + sw * self.sin_theta_o);
+        let sx = Vec4::select(
+            in_cone,
+            Vec4::ZERO,
+            sw * self.cos_theta_o - wv * self.sin_theta_o,
         );
-        let sin_w = sqrt(pos(Vec4::ONE - cos_w * cos_w));
-        // the cone of directions from p that the box subtends (its bounding sphere)
-        let cos_b = Vec4::select(
-            dist2.cmplt(self.radius2),
-            Vec4::NEG_ONE,
-            sqrt(pos(Vec4::ONE - self.radius2 / dist2)),
-        );
-        let sin_b = sqrt(pos(Vec4::ONE - cos_b * cos_b));
-        let cos_x = cos_sub(sin_w, cos_w, self.sin_theta_o, self.cos_theta_o);
-        let sin_x = sin_sub(sin_w, cos_w, self.sin_theta_o, self.cos_theta_o);
-        let cos_p = cos_sub(sin_x, cos_x, sin_b, cos_b);
-        let lit = cos_p.cmpgt(self.cos_theta_e);
-        let dot_n = wix * Vec4::splat(n.x) + wiy * Vec4::splat(n.y) + wiz * Vec4::splat(n.z);
-        let cos_i = Vec4::select(far, dot_n.abs(), Vec4::ONE);
-        let sin_i = sqrt(pos(Vec4::ONE - cos_i * cos_i));
-        let importance =
-            self.phi * cos_p * cos_sub(sin_i, cos_i, sin_b, cos_b) / dist2.max(self.min_d2);
-        Vec4::select(lit, pos(importance), Vec4::ZERO)
+        // d² cos θ′, θ′ = θ_x − θ_b clamped at 0
+        let cp = Vec4::select(cx.cmpgt(cb), dist2, cx * cb + sx * sb);
+        // d² cos θ_i′ at the receiver, θ_i′ = θ_i − θ_b clamped at 0
+        let nv = vx * Vec4::splat(n.x) + vy * Vec4::splat(n.y) + vz * Vec4::splat(n.z);
+        let ci = nv.abs();
+        let si = sqrt(pos(dist2 - nv * nv));
+        let cip = Vec4::select(ci.cmpgt(cb), dist2, ci * cb + si * sb);
+        let inv2 = dist2.recip();
+        let importance = scale * (cp * inv2) * (cip * inv2);
+        // inside the bounding sphere (θ_b = π) or at its centre, both angles are 0
+        let whole = dist2.cmplt(radius2) | dist2.cmple(Vec4::ZERO);
+        let lit = cp.cmpgt(self.cos_theta_e * dist2);
+        Vec4::select(whole, scale, Vec4::select(lit, pos(importance), Vec4::ZERO))
     }
 }
 
@@ -363,17 +360,20 @@ impl LightTree {
         if len >= m {
             let extra = len - m;
             let total: f64 = imp.iter().map(|&c| c as f64).sum();
+            // units per importance: one division a node, not one a lane
+            let rate = extra as f64 / total;
             let (mut cum, mut given) = (0.0f64, 0u32);
             for i in 0..WIDTH {
                 if imp[i] > 0.0 {
                     cum += imp[i] as f64;
                     given += 1;
                 }
-                // extra · cum/total, rounded (len ≤ 2²⁴ is exact in f64)
+                // extra · cum/total, rounded (to within 2⁻²⁸ of a unit before rounding: len ≤
+                // 2²⁴, f64); the last lane of importance takes the rest exactly
                 let e = if given == m {
                     extra
                 } else {
-                    ((extra as f64 * cum / total + 0.5) as u32).min(extra)
+                    ((cum * rate + 0.5) as u32).min(extra)
                 };
                 b[i + 1] = range.start + given + e;
             }
