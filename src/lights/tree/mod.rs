@@ -338,7 +338,7 @@ impl LightTree {
     /// to within a unit); with fewer units than such lanes, one unit each to the `len` of
     /// largest importance (ties to the first). A lone emitter's lane takes the whole range
     /// untested (a point behind it is refused by the caller).
-    #[inline]
+    #[inline(always)]
     fn split_units(
         &self,
         node: &WideNode,
