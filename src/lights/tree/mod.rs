@@ -82,7 +82,7 @@ impl LightBounds {
 }
 
 /// A [`LightBounds`] as the tree's descent reads it: what the importance needs, computed once
-/// at build time (centre, squared bounding radius, the distance floor, the cone's sine).
+/// at build time (centre, bounding radius, the distance floor, the cone's sine).
 #[derive(Clone, Copy, Debug)]
 struct NodeBounds {
     centre: Vec3,
@@ -266,7 +266,12 @@ impl WideNode {
         // inside the bounding sphere (θ_b = π) or at its centre, both angles are 0
         let whole = dist2.cmplt(radius2) | dist2.cmple(Vec4::ZERO);
         let lit = cp.cmpgt(self.cos_theta_e * dist2);
-        Vec4::select(whole, scale, Vec4::select(lit, pos(importance), Vec4::ZERO))
+        // pos: a powerless point box at p is 0/0, and gets 0 as before
+        Vec4::select(
+            whole,
+            pos(scale),
+            Vec4::select(lit, pos(importance), Vec4::ZERO),
+        )
     }
 }
 

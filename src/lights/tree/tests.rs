@@ -11,7 +11,7 @@ fn scalar_importance(b: &NodeBounds, p: Vec3, n: Vec3) -> f32 {
     let scale = b.phi / dist2.max(b.min_d2);
     let radius2 = b.radius * b.radius;
     if dist2 < radius2 || dist2 <= 0.0 {
-        return scale;
+        return scale.max(0.0);
     }
     let wv = b.w.dot(v);
     let sw = (dist2 - wv * wv).max(0.0).sqrt();
@@ -107,9 +107,13 @@ fn angle_importance(b: &NodeBounds, p: Vec3, n: Vec3) -> f64 {
 }
 
 /// The lanes' sines and cosines (lengths over the distance, no trigonometry) are the angles'
-/// to f32 rounding: within 10⁻³ of the bound's scale `Φ / max(d², min_d2)`, where a sine from
-/// `√(d² − (w·v)²)` near θ = 0 is good to about √ε ≈ 3·10⁻⁴ of it. Random emitters, unions and
-/// receivers as above, the receivers kept off the boxes' centres (d > 10⁻³).
+/// to f32 rounding: within 10⁻³ of the bound's scale `Φ / max(d², min_d2)`. The loosest term is
+/// a sine from `√(d² − (w·v)²)` near θ_w = 0 or π, good to about √(10 ε) ≈ 10⁻³ (several
+/// roundings in `d²` and `w·v`, and |w| ≠ 1 by an ulp); near 0 the clamp at θ_o removes it, and it
+/// reaches the bound to first order only near θ_w = π with θ_o + θ_b ≥ π/2, where random
+/// receivers rarely fall. Random emitters, unions and receivers as above, the receivers kept off
+/// the boxes' centres (d > 10⁻³). It shares `NodeBounds::of` (centre, radius, `min_d2`) with the
+/// code it checks, and every emitter here has θ_e = π/2, as every emitter of a scene does.
 #[test]
 fn a_nodes_lanes_are_pbrts_angles() {
     let mut rng = SmallRng::seed_from_u64(3);
@@ -188,5 +192,17 @@ fn a_split_follows_the_importance_in_whole_units() {
                 assert!(units >= 1 && (units as f64 - 1.0 - share).abs() <= 1.0);
             }
         }
+    }
+}
+
+/// A degenerate emitter (three coinciding corners: no area, no power, no normal) gives no
+/// importance, not NaN, even to a receiver at its point, where the bound is 0/0.
+#[test]
+fn a_powerless_point_has_no_importance() {
+    let c = Vec3::new(0.5, 1.0, -2.0);
+    let b = LightBounds::of(&Emitter::triangle(0, [c, c, c], Vec3::ONE));
+    for p in [c, c + Vec3::X] {
+        let i = b.importance(p, Vec3::Y);
+        assert_eq!(i, 0.0, "{i} at {p}");
     }
 }
