@@ -37,6 +37,32 @@ fn scalar_importance(b: &NodeBounds, p: Vec3, n: Vec3) -> f32 {
     (scale * (cp * inv2) * (cip * inv2)).max(0.0)
 }
 
+/// A node of three lanes, each bounding random triangles in [−2, 2)³ (powers from 1 to 4): one
+/// triangle, the union of two, the union of three; and a random receiver with its normal.
+fn random_node(rng: &mut SmallRng) -> (WideNode, [NodeBounds; 3], Vec3, Vec3) {
+    let mut v = || Vec3::new(rng.random(), rng.random(), rng.random()) * 4.0 - 2.0;
+    let e: Vec<LightBounds> = (0..4)
+        .map(|k| {
+            let (c, a, b) = (v(), 0.3 * v(), 0.3 * v());
+            let le = Vec3::splat(1.0 + k as f32);
+            LightBounds::of(&Emitter::triangle(0, [c, c + a, c + b], le))
+        })
+        .collect();
+    let lanes = [
+        e[0],
+        LightBounds::union(Some(e[0]), e[1]),
+        LightBounds::union(Some(e[2]), LightBounds::union(Some(e[1]), e[3])),
+    ]
+    .map(|b| NodeBounds::of(&b));
+    let mut node = WideNode::EMPTY;
+    node.count = 3;
+    for (i, b) in lanes.iter().enumerate() {
+        node.set_lane(i, b);
+    }
+    let (p, n) = (v(), v().normalize_or(Vec3::Y));
+    (node, lanes, p, n)
+}
+
 /// The four lanes of a collapsed node compute pbrt-v4's importance bound bit for bit as the
 /// scalar [`scalar_importance`] does for each child alone (the same operations in the
 /// same order; `sqrtps` rounds as `sqrtss`), zero included (behind a cone, inside a box),
@@ -45,29 +71,12 @@ fn scalar_importance(b: &NodeBounds, p: Vec3, n: Vec3) -> f32 {
 #[test]
 fn a_nodes_lanes_are_the_scalar_importance() {
     let mut rng = SmallRng::seed_from_u64(7);
-    let mut v = || Vec3::new(rng.random(), rng.random(), rng.random()) * 4.0 - 2.0;
     let (mut zero, mut positive) = (0, 0);
     for _ in 0..2000 {
-        let tri = |c: Vec3, a: Vec3, b: Vec3, le: f32| {
-            LightBounds::of(&Emitter::triangle(0, [c, c + a, c + b], Vec3::splat(le)))
-        };
-        let e: Vec<LightBounds> = (0..4)
-            .map(|k| tri(v(), 0.3 * v(), 0.3 * v(), 1.0 + k as f32))
-            .collect();
-        let lanes = [
-            e[0],
-            LightBounds::union(Some(e[0]), e[1]),
-            LightBounds::union(Some(e[2]), e[3]),
-        ];
-        let mut node = WideNode::EMPTY;
-        node.count = 3;
-        for (i, b) in lanes.iter().enumerate() {
-            node.set_lane(i, &NodeBounds::of(b));
-        }
-        let (p, n) = (v(), v().normalize_or(Vec3::Y));
+        let (node, lanes, p, n) = random_node(&mut rng);
         let wide = node.importance(p, n).to_array();
         for (i, b) in lanes.iter().enumerate() {
-            let scalar = scalar_importance(&NodeBounds::of(b), p, n);
+            let scalar = scalar_importance(b, p, n);
             assert_eq!(wide[i].to_bits(), scalar.to_bits(), "lane {i}: {wide:?}");
             if scalar > 0.0 {
                 positive += 1;
@@ -117,35 +126,17 @@ fn angle_importance(b: &NodeBounds, p: Vec3, n: Vec3) -> f64 {
 #[test]
 fn a_nodes_lanes_are_pbrts_angles() {
     let mut rng = SmallRng::seed_from_u64(3);
-    let mut v = || Vec3::new(rng.random(), rng.random(), rng.random()) * 4.0 - 2.0;
     let mut checked = 0;
     for _ in 0..2000 {
-        let tri = |c: Vec3, a: Vec3, b: Vec3, le: f32| {
-            LightBounds::of(&Emitter::triangle(0, [c, c + a, c + b], Vec3::splat(le)))
-        };
-        let e: Vec<LightBounds> = (0..4)
-            .map(|k| tri(v(), 0.3 * v(), 0.3 * v(), 1.0 + k as f32))
-            .collect();
-        let lanes = [
-            e[0],
-            LightBounds::union(Some(e[0]), e[1]),
-            LightBounds::union(Some(e[2]), LightBounds::union(Some(e[1]), e[3])),
-        ];
-        let mut node = WideNode::EMPTY;
-        node.count = 3;
-        for (i, b) in lanes.iter().enumerate() {
-            node.set_lane(i, &NodeBounds::of(b));
-        }
-        let (p, n) = (v(), v().normalize_or(Vec3::Y));
+        let (node, lanes, p, n) = random_node(&mut rng);
         let wide = node.importance(p, n).to_array();
         for (i, b) in lanes.iter().enumerate() {
-            let b = NodeBounds::of(b);
             let d2 = (p - b.centre).length_squared() as f64;
             if d2 < 1e-6 {
                 continue;
             }
             let scale = b.phi as f64 / d2.max(b.min_d2 as f64);
-            let angles = angle_importance(&b, p, n);
+            let angles = angle_importance(b, p, n);
             assert!(
                 (wide[i] as f64 - angles).abs() <= 1e-3 * scale,
                 "lane {i}: {} against {angles} (scale {scale})",
