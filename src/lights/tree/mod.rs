@@ -373,7 +373,7 @@ impl LightTree {
                     cum += imp[i] as f64;
                     given += 1;
                 }
-                // extra · cum/total, rounded (to within 2⁻²⁸ of a unit before rounding: len ≤
+                // extra · cum/total, rounded (within ~2⁻²⁷ of a unit before rounding: len ≤
                 // 2²⁴, f64); the last lane of importance takes the rest exactly
                 let e = if given == m {
                     extra
