@@ -189,6 +189,63 @@ fn lights(c: &mut Criterion) {
     g.finish();
 }
 
+/// One light sample per receiver in the shipped Cornell box: one quad light, so this is the
+/// light sampler's cost where there is nothing to choose (the race box's case), for 4096
+/// receivers spread over the floor, the back wall and the left wall, with the default `auto`
+/// points (solid angle where the light looks large, area elsewhere) and area points alone.
+fn lights_one(c: &mut Criterion) {
+    use glam::Vec3;
+    use vrpt::lights::{LightChoice, LightPoints};
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/cornell-box");
+    let scene = vrpt::scene::load(std::path::Path::new(path)).expect("the shipped Cornell box");
+    let receivers: Vec<(Vec3, Vec3, f32, Vec2)> = (0..SAMPLES)
+        .map(|i| {
+            let (a, b) = (
+                (i as f32 + 0.5) / SAMPLES as f32,
+                ((i * 7919) % SAMPLES) as f32 / SAMPLES as f32,
+            );
+            let (p, n) = match i % 3 {
+                0 => (Vec3::new(550.0 * a, 0.0, 559.0 * b), Vec3::Y),
+                1 => (Vec3::new(550.0 * a, 548.0 * b, 559.0), Vec3::NEG_Z),
+                _ => (Vec3::new(556.0, 548.0 * a, 559.0 * b), Vec3::NEG_X),
+            };
+            (p, n, b, Vec2::new(a, 1.0 - b))
+        })
+        .collect();
+    let mut g = c.benchmark_group("lights_one");
+    g.warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(2))
+        .throughput(Throughput::Elements(SAMPLES as u64));
+    for points in [LightPoints::Area, LightPoints::Auto] {
+        let sampler = scene.lights.sampler(points, LightChoice::Tree);
+        g.bench_function(format!("sample_{points}"), |b| {
+            b.iter(|| {
+                receivers
+                    .iter()
+                    .filter_map(|&(p, n, u, v)| sampler.sample(p, n, u, v))
+                    .map(|s| s.pdf)
+                    .sum::<f32>()
+            })
+        });
+        g.bench_function(format!("pdf_{points}"), |b| {
+            b.iter(|| {
+                receivers
+                    .iter()
+                    .map(|&(p, n, _, v)| {
+                        sampler.pdf(
+                            0,
+                            p,
+                            n,
+                            Vec3::new(213.0 + 130.0 * v.x, 548.0, 227.0 + 105.0 * v.y),
+                        )
+                    })
+                    .sum::<f32>()
+            })
+        });
+    }
+    g.finish();
+}
+
 /// The environment map of sun-sky: a direction drawn by luminance, and the pdf of a direction.
 fn environment(c: &mut Criterion) {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/sun-sky");
@@ -355,6 +412,7 @@ criterion_group!(
     samplers_in_pixels,
     warps,
     lights,
+    lights_one,
     environment,
     guide
 );
