@@ -139,33 +139,38 @@ impl<F: SamplerFactory> Trainer<'_, F> {
         let mut film = kept
             .as_ref()
             .map(|_| Film::new(settings.width, settings.height));
+        // a chunk's records are added to the tree while the next chunk renders
+        let mut pending: Vec<Vec<Record>> = Vec::new();
         for (tiles, samples) in training_chunks(tile_count(settings), spp) {
             let pieces = sample_pieces(&tiles, samples);
-            let guide = Guiding {
-                tree: Some(&*tree),
-                record: true,
-            };
-            let kernel = Kernel::new(
-                self.scene,
-                self.camera,
-                settings,
-                self.factory,
-                guide,
-                &NoProgress,
-            )
-            .with_seed(seed)
-            .with_strip(self.plan.strip.as_deref());
-            let results: Vec<BatchOutput> = pieces
-                .into_par_iter()
-                .map(|range| {
-                    let batch = Batch {
-                        samples: Samples::Pass { set, range },
-                        tiles: tiles.clone(),
-                        stop: self.plan.stop.as_deref(),
+            let results: Vec<BatchOutput> =
+                tree.add_records_during(std::mem::take(&mut pending), |tree| {
+                    let guide = Guiding {
+                        tree: Some(tree),
+                        record: true,
                     };
-                    kernel.render(&batch, None)
-                })
-                .collect();
+                    let kernel = Kernel::new(
+                        self.scene,
+                        self.camera,
+                        settings,
+                        self.factory,
+                        guide,
+                        &NoProgress,
+                    )
+                    .with_seed(seed)
+                    .with_strip(self.plan.strip.as_deref());
+                    pieces
+                        .into_par_iter()
+                        .map(|range| {
+                            let batch = Batch {
+                                samples: Samples::Pass { set, range },
+                                tiles: tiles.clone(),
+                                stop: self.plan.stop.as_deref(),
+                            };
+                            kernel.render(&batch, None)
+                        })
+                        .collect()
+                });
             if results.iter().any(|r| r.cut) {
                 return false; // a cut chunk's records are dropped, and training ends
             }
@@ -181,8 +186,11 @@ impl<F: SamplerFactory> Trainer<'_, F> {
                         t.add_to(film);
                     }
                 }
-                tree.add_records(r.records);
+                pending.push(r.records);
             }
+        }
+        for records in pending {
+            tree.add_records(records);
         }
         tree.finish_iteration(spp * settings.width as u64 * settings.height as u64);
         if n_samples > 0 {
