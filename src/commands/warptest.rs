@@ -316,8 +316,8 @@ pub fn trained_guide_leaf() -> crate::guiding::DTree {
                     p_guide: p,
                 }
             })
-            .collect();
-        tree.add_records(records);
+            .collect::<Vec<_>>();
+        tree.add_records(&records);
         tree.finish_iteration(n as u64);
     }
     tree.sampling(tree.leaf_at(at)).clone()

@@ -346,7 +346,7 @@ mod tests {
         assert_eq!(g.alpha, 0.0);
         assert_eq!(g.survival(Vec3::ONE, 1.0), 0.0);
         let up = dir_to_canonical(Vec3::Y);
-        let records = (0..4000)
+        let records: Vec<Record> = (0..4000)
             .map(|k| Record {
                 leaf: 0,
                 point: if k % 4 == 0 {
@@ -361,7 +361,7 @@ mod tests {
                 p_guide: 1.0,
             })
             .collect();
-        t.add_records(records);
+        t.add_records(&records);
         t.set_image_mean(0.5);
         t.finish_iteration(4000);
         let g = GuideAt::new(&t, p);
@@ -392,7 +392,7 @@ mod tests {
         // the learner an α above ½; the leaf samples the guide with at most MAX_GUIDE_FRACTION
         for _ in 0..4 {
             let leaf = t.leaf_at(p);
-            let records = (0..4000)
+            let records: Vec<Record> = (0..4000)
                 .map(|_| Record {
                     leaf,
                     point: up,
@@ -403,7 +403,7 @@ mod tests {
                     p_guide: 4.0,
                 })
                 .collect();
-            t.add_records(records);
+            t.add_records(&records);
             t.finish_iteration(4000);
         }
         assert_eq!(GuideAt::new(&t, p).alpha, MAX_GUIDE_FRACTION);

@@ -65,8 +65,10 @@ pub(super) struct BatchOutput {
     /// Whether the stop flag left some pixel out (the film then holds a partial batch, for the
     /// caller to drop).
     pub(super) cut: bool,
-    /// The paths' guiding records, tile by tile in sample order (when the guide records).
-    pub(super) records: Vec<Record>,
+    /// The paths' guiding records, each tile's in sample order, the tiles in order (when the
+    /// guide records; kept per tile, not concatenated after the parallel tiles while the
+    /// other threads wait: the tree groups them by leaf anyway).
+    pub(super) records: Vec<Vec<Record>>,
     /// The continuations of `--roulette ears`, tile by tile in sample order (when it records).
     pub(super) rrs_records: Vec<RrsRecord>,
     /// What the samples added to the pixels' sums (a render without a film only).
@@ -521,18 +523,20 @@ impl<'a, F: SamplerFactory> Kernel<'a, F> {
 }
 
 /// The tiles' results gathered: their pixels' sums written into `film` (if any), their
-/// records concatenated in tile order, their counters summed.
+/// records listed in tile order, their counters summed.
 fn gather(tiles: Vec<Tile>, mut film: Option<&mut Film>) -> BatchOutput {
     let mut out = BatchOutput {
         stats: RenderStats::default(),
         cut: false,
-        records: Vec::with_capacity(tiles.iter().map(|t| t.records.len()).sum()),
+        records: Vec::with_capacity(tiles.len()),
         rrs_records: Vec::with_capacity(tiles.iter().map(|t| t.rrs_records.len()).sum()),
         total: DVec3::ZERO,
         tile_sums: Vec::new(),
     };
     for mut tile in tiles {
-        out.records.append(&mut tile.records);
+        if !tile.records.is_empty() {
+            out.records.push(std::mem::take(&mut tile.records));
+        }
         out.rrs_records.append(&mut tile.rrs_records);
         // the pixels a tile rendered, in its order (all of them unless it was cut short)
         let w = tile.size.x as usize;

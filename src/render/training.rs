@@ -186,12 +186,10 @@ impl<F: SamplerFactory> Trainer<'_, F> {
                         t.add_to(film);
                     }
                 }
-                pending.push(r.records);
+                pending.extend(r.records);
             }
         }
-        for records in pending {
-            tree.add_records(records);
-        }
+        tree.add_records_during(pending, |_| ());
         tree.finish_iteration(spp * settings.width as u64 * settings.height as u64);
         if n_samples > 0 {
             tree.set_image_mean(crate::math::luminance((sum / n_samples as f64).as_vec3()));

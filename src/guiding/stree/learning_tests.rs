@@ -40,7 +40,9 @@ fn grouping_by_leaf_is_a_stable_sort() {
             p_guide: 1.0,
         })
         .collect();
-    let (grouped, start) = group_by_leaf(&records, 64);
+    // in three sets of uneven length, as a batch's tiles hand them over
+    let sets = [&records[..1200], &records[1200..1201], &records[1201..]];
+    let (grouped, start) = group_by_leaf(&sets, 64);
     let mut sorted = records.clone();
     sorted.sort_by_key(|r| r.leaf);
     assert_eq!(grouped, sorted);
@@ -65,7 +67,7 @@ fn records_added_during_a_render_make_the_same_tree() {
             .map(|_| random_records(&alone, &mut rng, 40_000))
             .collect();
         for set in &sets {
-            alone.add_records(set.clone());
+            alone.add_records(set);
         }
         let leaves = during.add_records_during(sets, |t| t.size().leaves);
         assert_eq!(leaves, during.leaves.len());
