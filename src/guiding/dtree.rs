@@ -183,24 +183,28 @@ impl DTree {
         let (mut origin, mut size) = (Vec2::ZERO, 1.0f32);
         let mut n = 0usize;
         loop {
+            // a column by `u.x·total < left`, then `u.x` rescaled within it: one division on
+            // the chain from one level's `u.x` to the next's (two before, `left/total` and then
+            // `u.x/p_left`); the same for the row. A side of zero energy is never taken
+            // (`u.x·total` can round up to `total` = `left`).
             let s = self.nodes[n].sum;
-            let left = s[0] + s[2];
-            let total = left + s[1] + s[3];
-            let p_left = left / total;
-            let ix = if u.x < p_left {
-                u.x /= p_left;
+            let (left, right) = (s[0] + s[2], s[1] + s[3]);
+            let total = left + right;
+            let x = u.x * total;
+            let ix = if x < left || right <= 0.0 {
+                u.x = x / left;
                 0
             } else {
-                u.x = (u.x - p_left) / (1.0 - p_left);
+                u.x = (x - left) / right;
                 1
             };
             let (lo, hi) = (s[ix], s[ix + 2]);
-            let p_low = lo / (lo + hi);
-            let iy = if u.y < p_low {
-                u.y /= p_low;
+            let y = u.y * (lo + hi);
+            let iy = if y < lo || hi <= 0.0 {
+                u.y = y / lo;
                 0
             } else {
-                u.y = (u.y - p_low) / (1.0 - p_low);
+                u.y = (y - lo) / hi;
                 1
             };
             u = u.clamp(Vec2::ZERO, Vec2::splat(ONE_MINUS_EPSILON));
