@@ -121,6 +121,42 @@ fn warps(c: &mut Criterion) {
     g.finish();
 }
 
+/// A receiver of the light benches: point, normal, the light choice's and the point's numbers.
+type Receiver = (glam::Vec3, glam::Vec3, f32, Vec2);
+
+/// [`SAMPLES`] receivers, the `i`-th at `place(i, a, b)` (point and normal) with `a`, `b`
+/// spread over `[0, 1)` (a rank-1 lattice), and the numbers `b` and `(a, 1 − b)`.
+fn spread_receivers(place: impl Fn(u32, f32, f32) -> (glam::Vec3, glam::Vec3)) -> Vec<Receiver> {
+    (0..SAMPLES)
+        .map(|i| {
+            let (a, b) = (
+                (i as f32 + 0.5) / SAMPLES as f32,
+                ((i * 7919) % SAMPLES) as f32 / SAMPLES as f32,
+            );
+            let (p, n) = place(i, a, b);
+            (p, n, b, Vec2::new(a, 1.0 - b))
+        })
+        .collect()
+}
+
+/// One light sample for each of `receivers`, the sum of their pdfs kept.
+fn bench_light_samples(
+    g: &mut criterion::BenchmarkGroup<'_, criterion::measurement::WallTime>,
+    name: &str,
+    sampler: &vrpt::lights::LightSampler,
+    receivers: &[Receiver],
+) {
+    g.bench_function(name, |b| {
+        b.iter(|| {
+            receivers
+                .iter()
+                .filter_map(|&(p, n, u, v)| sampler.sample(p, n, u, v))
+                .map(|s| s.pdf)
+                .sum::<f32>()
+        })
+    });
+}
+
 /// One light sample per receiver on the shipped night hall (160 emitters): choose a light
 /// (uniform, power, tree) and place a point on it (area, solid angle, projected), for 4096
 /// receivers spread over the floor and walls. `choose` alone is the cost of a tree lookup;
@@ -130,19 +166,10 @@ fn lights(c: &mut Criterion) {
     use vrpt::lights::{LightChoice, LightPoints};
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/night-hall");
     let scene = vrpt::scene::load(std::path::Path::new(path)).expect("the shipped night hall");
-    let receivers: Vec<(Vec3, Vec3, f32, Vec2)> = (0..SAMPLES)
-        .map(|i| {
-            let (a, b) = (
-                (i as f32 + 0.5) / SAMPLES as f32,
-                ((i * 7919) % SAMPLES) as f32 / SAMPLES as f32,
-            );
-            let (p, n) = match i % 3 {
-                0 | 1 => (Vec3::new(8.0 * a - 4.0, 0.0, -60.0 * b), Vec3::Y),
-                _ => (Vec3::new(-4.0, 4.4 * a, -60.0 * b), Vec3::X),
-            };
-            (p, n, b, Vec2::new(a, 1.0 - b))
-        })
-        .collect();
+    let receivers = spread_receivers(|i, a, b| match i % 3 {
+        0 | 1 => (Vec3::new(8.0 * a - 4.0, 0.0, -60.0 * b), Vec3::Y),
+        _ => (Vec3::new(-4.0, 4.4 * a, -60.0 * b), Vec3::X),
+    });
     let mut g = c.benchmark_group("lights");
     g.warm_up_time(Duration::from_secs(1))
         .measurement_time(Duration::from_secs(2))
@@ -176,15 +203,12 @@ fn lights(c: &mut Criterion) {
         LightPoints::Auto,
     ] {
         let sampler = scene.lights.sampler(points, LightChoice::Tree);
-        g.bench_function(format!("sample_{points}_tree"), |b| {
-            b.iter(|| {
-                receivers
-                    .iter()
-                    .filter_map(|&(p, n, u, v)| sampler.sample(p, n, u, v))
-                    .map(|s| s.pdf)
-                    .sum::<f32>()
-            })
-        });
+        bench_light_samples(
+            &mut g,
+            &format!("sample_{points}_tree"),
+            &sampler,
+            &receivers,
+        );
     }
     g.finish();
 }
@@ -198,35 +222,18 @@ fn lights_one(c: &mut Criterion) {
     use vrpt::lights::{LightChoice, LightPoints};
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/cornell-box");
     let scene = vrpt::scene::load(std::path::Path::new(path)).expect("the shipped Cornell box");
-    let receivers: Vec<(Vec3, Vec3, f32, Vec2)> = (0..SAMPLES)
-        .map(|i| {
-            let (a, b) = (
-                (i as f32 + 0.5) / SAMPLES as f32,
-                ((i * 7919) % SAMPLES) as f32 / SAMPLES as f32,
-            );
-            let (p, n) = match i % 3 {
-                0 => (Vec3::new(550.0 * a, 0.0, 559.0 * b), Vec3::Y),
-                1 => (Vec3::new(550.0 * a, 548.0 * b, 559.0), Vec3::NEG_Z),
-                _ => (Vec3::new(556.0, 548.0 * a, 559.0 * b), Vec3::NEG_X),
-            };
-            (p, n, b, Vec2::new(a, 1.0 - b))
-        })
-        .collect();
+    let receivers = spread_receivers(|i, a, b| match i % 3 {
+        0 => (Vec3::new(550.0 * a, 0.0, 559.0 * b), Vec3::Y),
+        1 => (Vec3::new(550.0 * a, 548.0 * b, 559.0), Vec3::NEG_Z),
+        _ => (Vec3::new(556.0, 548.0 * a, 559.0 * b), Vec3::NEG_X),
+    });
     let mut g = c.benchmark_group("lights_one");
     g.warm_up_time(Duration::from_secs(1))
         .measurement_time(Duration::from_secs(2))
         .throughput(Throughput::Elements(SAMPLES as u64));
     for points in [LightPoints::Area, LightPoints::Auto] {
         let sampler = scene.lights.sampler(points, LightChoice::Tree);
-        g.bench_function(format!("sample_{points}"), |b| {
-            b.iter(|| {
-                receivers
-                    .iter()
-                    .filter_map(|&(p, n, u, v)| sampler.sample(p, n, u, v))
-                    .map(|s| s.pdf)
-                    .sum::<f32>()
-            })
-        });
+        bench_light_samples(&mut g, &format!("sample_{points}"), &sampler, &receivers);
         g.bench_function(format!("pdf_{points}"), |b| {
             b.iter(|| {
                 receivers

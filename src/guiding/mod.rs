@@ -167,7 +167,7 @@ pub fn canonical_to_dir(p: Vec2) -> Vec3 {
 
 /// One radiance record: the S-tree leaf of the vertex, the canonical point of the sampled
 /// direction, `L_i / p` (see the module doc), and what learning `α` needs.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Record {
     /// Index of the S-tree leaf the vertex lies in.
     pub leaf: u32,

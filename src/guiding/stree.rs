@@ -7,7 +7,7 @@ use super::{
     SPATIAL_THRESHOLD,
 };
 use crate::sampling::ONE_MINUS_EPSILON;
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 use rayon::prelude::*;
 
 /// A node of the S-tree: split along `axis` at its middle into nodes `child` and `child + 1`
@@ -399,18 +399,7 @@ fn group_by_leaf(records: &[&[Record]], leaves: usize) -> (Vec<Record>, Vec<usiz
         start[i + 1] += start[i];
     }
     let mut next = start[..leaves].to_vec();
-    let mut grouped = vec![
-        Record {
-            leaf: 0,
-            point: Vec2::ZERO,
-            value: 0.0,
-            product: 0.0,
-            pdf: 0.0,
-            p_bsdf: 0.0,
-            p_guide: 0.0,
-        };
-        start[leaves]
-    ];
+    let mut grouped = vec![Record::default(); start[leaves]];
     for r in records.iter().copied().flatten() {
         let slot = &mut next[r.leaf as usize];
         grouped[*slot] = *r;

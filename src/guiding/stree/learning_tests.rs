@@ -2,6 +2,7 @@
 //! whether they are added alone or while a render reads the tree.
 
 use super::*;
+use glam::Vec2;
 use rand::{rngs::SmallRng, Rng, SeedableRng};
 
 /// `n` records at random points of the cube `[0, 4)³`, each in the leaf of `tree` its point
@@ -33,11 +34,7 @@ fn grouping_by_leaf_is_a_stable_sort() {
         .map(|i| Record {
             leaf: rng.random_range(0..50u32) * 64 / 50,
             point: Vec2::new(i as f32, 0.0), // the record's place in the input: its order
-            value: 1.0,
-            product: 0.0,
-            pdf: 1.0,
-            p_bsdf: 1.0,
-            p_guide: 1.0,
+            ..Record::default()
         })
         .collect();
     // in three sets of uneven length, as a batch's tiles hand them over
