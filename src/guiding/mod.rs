@@ -187,9 +187,8 @@ pub struct Record {
 /// The guide a render learns and samples with: the SD-tree. Outside `guiding` the renderer
 /// (`render`, `integrator`) names only this and [`GuideAt`], and calls only their functions
 /// (`new`, `add_records`, `add_records_during`, `finish_iteration`, `set_image_mean`, `size`;
-/// at a vertex `sample`,
-/// the pdfs, `survival`, `splat_leaf`), so a second guide is an enum behind this name with
-/// those functions: one room. `vrpt guide` and the warp test look into the SD-tree itself
+/// at a vertex `sample`, the pdfs, `survival`, `splat_leaf`), so a second guide is an enum
+/// behind this name with those functions: one room. `vrpt guide` and the warp test look into the SD-tree itself
 /// (`leaf_at`, `sampling`, `DTree`): they show and test that guide.
 pub type Guide = SdTree;
 

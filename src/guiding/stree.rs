@@ -263,10 +263,10 @@ impl SdTree {
     }
 
     /// Run `work` on this tree while the sets of `records` are added to it, as if
-    /// concatenated, as [`Self::add_records`] would: a render samples only from what the last iteration
-    /// built, and records go only into what this one builds, so a training chunk renders
-    /// while the chunk before it is recorded (on the door the records took a fifth of the
-    /// training's wall time, the render waiting). `work`'s result.
+    /// concatenated, as [`Self::add_records`] would: a render samples only from what the last
+    /// iteration built, and records go only into what this one builds, so a training chunk
+    /// renders while the chunk before it is recorded (on the door the records took a fifth of
+    /// the training's wall time, the render waiting). `work`'s result.
     pub fn add_records_during<R: Send>(
         &mut self,
         records: Vec<Vec<Record>>,
@@ -276,10 +276,7 @@ impl SdTree {
         let tree = &*self;
         let (out, ()) = rayon::join(
             || work(tree),
-            || {
-                let sets: Vec<&[Record]> = records.iter().map(Vec::as_slice).collect();
-                record(&tree.leaves, &mut learners, &sets)
-            },
+            || record(&tree.leaves, &mut learners, &records),
         );
         self.learners = learners;
         out
@@ -362,7 +359,7 @@ impl SdTree {
 /// Add `records` (the sets in order, each in its order) to the `learners` of the tree whose
 /// leaves are `leaves`: grouped by leaf ([`group_by_leaf`]), each leaf adding its own in
 /// order, leaves in parallel — the same bits for any thread count.
-fn record(leaves: &[Leaf], learners: &mut [Learner], records: &[&[Record]]) {
+fn record<S: AsRef<[Record]>>(leaves: &[Leaf], learners: &mut [Learner], records: &[S]) {
     let (records, start) = group_by_leaf(records, leaves.len());
     let records = &records;
     learners
@@ -385,14 +382,13 @@ fn record(leaves: &[Leaf], learners: &mut [Learner], records: &[&[Record]]) {
 }
 
 /// The records of the sets `records`, as if concatenated, grouped by leaf (of `leaves`
-/// leaves), each leaf's records in their given order,
-/// and where each leaf's run starts (`leaves + 1` offsets): a counting sort, the order a
-/// stable sort by leaf gives. (The stable merge sort it replaces took ~58 ns a record, 40% of
+/// leaves), each leaf's records in their given order, and where each leaf's run starts
+/// (`leaves + 1` offsets): a counting sort, the order a stable sort by leaf gives. (The stable merge sort it replaces took ~58 ns a record, 40% of
 /// adding a training chunk's records on the door, while the render waited; this takes two
 /// passes over them.)
-fn group_by_leaf(records: &[&[Record]], leaves: usize) -> (Vec<Record>, Vec<usize>) {
+fn group_by_leaf<S: AsRef<[Record]>>(records: &[S], leaves: usize) -> (Vec<Record>, Vec<usize>) {
     let mut start = vec![0usize; leaves + 1];
-    for r in records.iter().copied().flatten() {
+    for r in records.iter().flat_map(S::as_ref) {
         start[r.leaf as usize + 1] += 1;
     }
     for i in 0..leaves {
@@ -400,7 +396,7 @@ fn group_by_leaf(records: &[&[Record]], leaves: usize) -> (Vec<Record>, Vec<usiz
     }
     let mut next = start[..leaves].to_vec();
     let mut grouped = vec![Record::default(); start[leaves]];
-    for r in records.iter().copied().flatten() {
+    for r in records.iter().flat_map(S::as_ref) {
         let slot = &mut next[r.leaf as usize];
         grouped[*slot] = *r;
         *slot += 1;

@@ -166,17 +166,7 @@ impl<F: SamplerFactory> Trainer<'_, F> {
                 pixel_norm: &state.pixel_norm,
                 record: true,
             };
-            let kernel = Kernel::new(
-                self.scene,
-                self.camera,
-                settings,
-                self.factory,
-                guiding,
-                &NoProgress,
-            )
-            .with_seed(seed)
-            .with_rrs(Some(rrs))
-            .with_strip(self.plan.strip.as_deref());
+            let kernel = self.kernel(guiding, seed).with_rrs(Some(rrs));
             let batch = Batch {
                 samples: Samples::Pass { set, range: 0..spp },
                 tiles: start..(start + per_chunk).min(tiles),

@@ -68,7 +68,23 @@ impl std::fmt::Debug for LearnedGuide {
     }
 }
 
-impl<F: SamplerFactory> Trainer<'_, F> {
+impl<'a, F: SamplerFactory> Trainer<'a, F> {
+    /// The kernel a training render (the guide's or the roulette's) runs: this render's scene,
+    /// camera, settings and sampler, `guide`, iteration seed `seed`, the plan's strip of tiles
+    /// (a pilot's) and no progress bar.
+    pub(super) fn kernel(&self, guide: Guiding<'a>, seed: u64) -> Kernel<'a, F> {
+        Kernel::new(
+            self.scene,
+            self.camera,
+            self.settings,
+            self.factory,
+            guide,
+            &NoProgress,
+        )
+        .with_seed(seed)
+        .with_strip(self.plan.strip.as_deref())
+    }
+
     /// The training iterations of a guided render (see [`crate::guiding`]): iterations of 1,
     /// 2, 4, … spp, each sampling with the tree the earlier ones taught and recording into the
     /// next, while their sum stays within `budget.spp` (at least one iteration), and while the
@@ -149,16 +165,7 @@ impl<F: SamplerFactory> Trainer<'_, F> {
                         tree: Some(tree),
                         record: true,
                     };
-                    let kernel = Kernel::new(
-                        self.scene,
-                        self.camera,
-                        settings,
-                        self.factory,
-                        guide,
-                        &NoProgress,
-                    )
-                    .with_seed(seed)
-                    .with_strip(self.plan.strip.as_deref());
+                    let kernel = self.kernel(guide, seed);
                     pieces
                         .into_par_iter()
                         .map(|range| {
