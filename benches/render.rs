@@ -162,5 +162,34 @@ fn reuse(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, scenes, defaults, guided, reuse);
+/// Edge rays (`--edge-rays M`) on the shipped Cornell box at 64×64 (its light in view): the
+/// whole render at 16 spp with M = 0, 16 and 64 (their cost falls on the edge pixels only), and
+/// at 1 spp with M = 0 and 16, where the probe of four rays a pixel is most of the difference.
+fn edge_rays(c: &mut Criterion) {
+    let scene =
+        vrpt::scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-box"))
+            .expect("shipped scene");
+    let (w, h) = (64, 64);
+    let mut g = c.benchmark_group("render_edges");
+    g.sample_size(10)
+        .warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(3));
+    for (spp, m) in [(16, 0), (16, 16), (16, 64), (1, 0), (1, 16)] {
+        let s = RenderSettings {
+            width: w,
+            height: h,
+            spp,
+            edge_rays: m,
+            ..Default::default()
+        };
+        let id = BenchmarkId::from_parameter(format!("{spp}spp_{m}rays"));
+        g.throughput(Throughput::Elements((w * h * spp) as u64));
+        g.bench_with_input(id, &s, |b, s| {
+            b.iter(|| black_box(render(&scene, s, &NoProgress).unwrap()))
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, scenes, defaults, guided, reuse, edge_rays);
 criterion_main!(benches);

@@ -261,6 +261,7 @@ def render(
     target_error: Optional[float] = None,
     reuse: Optional[int] = None,
     roulette: Optional[str] = None,
+    edge_rays: Optional[int] = None,
     training_images: Optional[str] = None,
     threads: Optional[int] = None,
     strict: bool = False,
@@ -278,6 +279,8 @@ def render(
     ``summary`` and ``metadata["auto"]``), and ``sampler``, ``directions`` (``guided`` for path
     guiding), ``lights``, ``light_points``, ``light_choice`` set one part of it. ``roulette`` is
     ``classic`` or ``ears`` (efficiency-aware roulette and splitting, learned while rendering).
+    ``edge_rays`` is how many camera rays a sample spends on the emission seen directly in a
+    pixel along the edge of a light (default 16; 0: off).
     ``training_images`` (guided directions only) is ``keep`` (the default: the last training
     iterations are combined into the image by inverse variance) or ``discard``.
     ``sampler`` may also be a function of your own (see ``SamplerFunction``): slow, since Python
@@ -308,6 +311,7 @@ def render(
         target_error=target_error,
         reuse=reuse,
         roulette=roulette,
+        edge_rays=edge_rays,
         training_images=training_images,
         threads=threads,
         strict=strict,

@@ -126,6 +126,7 @@ fn check_inputs(inputs: &[MergeInput]) -> Result<()> {
                 // written only where it is on
                 "reuse" => x.get("reuse").map_or("1 (off)".into(), |k| k.clone()),
                 "roulette" => x.get("roulette").map_or("classic".into(), |k| k.clone()),
+                "edge_rays" => x.get("edge_rays").map_or("0 (off)".into(), |k| k.clone()),
                 k => x.get(k).cloned().unwrap_or_else(|| "absent".into()),
             };
             return Err(bad(
@@ -175,6 +176,7 @@ fn differing_setting(m: &RenderMetadata, first: &RenderMetadata) -> Option<&'sta
         ("max_depth", m.max_depth != first.max_depth),
         ("reuse", m.reuse != first.reuse),
         ("roulette", m.roulette != first.roulette),
+        ("edge_rays", m.edge_rays != first.edge_rays),
         ("sampler", m.strategy.sampler != first.strategy.sampler),
         (
             "directions",

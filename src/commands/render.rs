@@ -76,6 +76,13 @@ pub struct RenderRequest {
     /// neighbours' errors then correlate). 1: off [default: 1]
     #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(1..=crate::render::MAX_REUSE as i64))]
     pub reuse: Option<u32>,
+    /// Edge rays: in a pixel where the emission seen directly varies (the edge of a light, of
+    /// the sun), each sample estimates it apart with M camera rays of its own at the pixel's
+    /// stratified points, and the path's camera ray no longer counts it (unbiased; the pixels
+    /// are found by a probe of four rays a pixel before the render). 0: off
+    #[arg(long, value_name = "M", default_value_t = crate::render::DEFAULT_EDGE_RAYS,
+          value_parser = clap::value_parser!(u32).range(0..=crate::render::MAX_EDGE_RAYS as i64))]
+    pub edge_rays: u32,
     /// How paths end and split: `classic` Russian roulette from the third bounce, or `ears`,
     /// efficiency-aware roulette and splitting (Rath et al. 2022) learned in a short training
     /// (at most an eighth of the spp or time) and then frozen: unbiased, a path may split into
@@ -376,6 +383,7 @@ impl RenderRequest {
             },
             threads: self.threads,
             time_traces: self.time_traces,
+            edge_rays: self.edge_rays,
             reuse: match &auto {
                 Some(c) => c[0].reuse,
                 None => self.reuse.unwrap_or(1),

@@ -51,6 +51,9 @@ pub struct RayCounts {
     pub shadow: u64,
     /// Path reuse's connections (their shadow rays, also counted in `shadow`).
     pub connection: u64,
+    /// Camera rays that look only for the emission seen directly (`--edge-rays`; also counted
+    /// in `camera`).
+    pub edge: u64,
     /// The luminance of every path estimate the path tracer returned, summed (a reused path's
     /// continuation counted as traced). Each tile counts its own, and a render sums its tiles
     /// in their order, so the sum is the same on any number of threads. Not counted by
@@ -98,6 +101,7 @@ impl RayCounts {
         self.bounce += o.bounce;
         self.shadow += o.shadow;
         self.connection += o.connection;
+        self.edge += o.edge;
         self.light += o.light;
         self.caustic += o.caustic;
         self.trace_ns += o.trace_ns;

@@ -233,6 +233,21 @@ pub const KEYS: &[Key] = &[
         },
     },
     Key {
+        // written where a render spent them
+        name: "edge_rays",
+        write: |m| (m.edge_rays > 0).then(|| m.edge_rays.to_string()),
+        read: |m, v| {
+            m.edge_rays = v.opt()?.unwrap_or(0);
+            match m.edge_rays {
+                k if k > crate::render::MAX_EDGE_RAYS => Err(format!(
+                    "metadata 'edge_rays' is {k}, not 0 to {}",
+                    crate::render::MAX_EDGE_RAYS
+                )),
+                _ => Ok(()),
+            }
+        },
+    },
+    Key {
         name: "render_seconds",
         write: |m| micros(m.render_seconds),
         read: |m, v| set(&mut m.render_seconds, v.seconds()?.unwrap_or(0.0)),

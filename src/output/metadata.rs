@@ -42,6 +42,9 @@ pub struct RenderMetadata {
     pub reuse: Option<u32>,
     /// How paths ended and split (`--roulette`).
     pub roulette: crate::integrator::rrs::Roulette,
+    /// The edge rays a sample spent in an edge pixel (`--edge-rays`; 0: none, as in images
+    /// from before them).
+    pub edge_rays: u32,
     /// Wall time of the render, `--strategy auto`'s pilots included (summed over the inputs of
     /// a merge).
     pub render_seconds: f64,
@@ -184,6 +187,7 @@ impl RenderMetadata {
             max_depth: settings.max_depth,
             reuse: (settings.reuse > 1).then_some(settings.reuse),
             roulette: settings.roulette,
+            edge_rays: settings.edge_rays,
             render_seconds: stats.elapsed.as_secs_f64(),
             nonfinite_samples: stats.nonfinite,
             pass_spp: None,
@@ -281,6 +285,7 @@ impl RenderMetadata {
             max_depth: 0,
             reuse: None,
             roulette: Default::default(),
+            edge_rays: 0,
             render_seconds: 0.0,
             nonfinite_samples: 0,
             pass_spp: None,

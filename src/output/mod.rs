@@ -90,6 +90,7 @@ mod tests {
             max_depth: 5,
             reuse: Some(3),
             roulette: crate::integrator::rrs::Roulette::Ears,
+            edge_rays: 16,
             render_seconds: 1.5,
             nonfinite_samples: 2,
             pass_spp: Some(16),

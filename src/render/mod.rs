@@ -37,6 +37,7 @@ use std::time::{Duration, Instant};
 mod adaptive;
 pub mod auto;
 mod combine;
+pub mod edges;
 mod passes;
 mod rrs_training;
 mod settings;
@@ -46,7 +47,9 @@ mod tile;
 mod training;
 pub use combine::{Combination, KEPT_BYTES_PER_PIXEL, KEPT_ITERATIONS};
 use settings::camera_for;
-pub use settings::{RenderSettings, ACTING_REPLICATES, MAX_REUSE};
+pub use settings::{
+    RenderSettings, ACTING_REPLICATES, DEFAULT_EDGE_RAYS, MAX_EDGE_RAYS, MAX_REUSE,
+};
 pub use stats::{GuideStats, RenderStats, RrsStats};
 pub use strip::TileStrip;
 use tile::{tile_count, Alloc, Batch, BatchOutput, Kernel, Samples};
@@ -361,6 +364,12 @@ pub fn render_passes_with<F: SamplerFactory>(
     let start = Instant::now();
     with_threads(settings.threads, || {
         let mut stats = RenderStats::default();
+        let edges = edge_map(scene, &camera, settings, plan);
+        if let Some(e) = &edges {
+            stats.rays.add(&e.rays);
+            stats.edge_pixels = e.count;
+        }
+        let edges = edges.as_ref();
         let guided = settings.strategy.directions == Directions::Guided;
         let learned = plan.guide.as_deref().filter(|_| guided);
         if let Some(l) = learned {
@@ -374,6 +383,7 @@ pub fn render_passes_with<F: SamplerFactory>(
                 settings,
                 plan,
                 factory,
+                edges,
             };
             let budget = TrainingBudget::of_render(settings, plan);
             trainer.train(start, budget, &mut stats, kept.as_mut())
@@ -389,6 +399,7 @@ pub fn render_passes_with<F: SamplerFactory>(
             settings,
             plan,
             factory,
+            edges,
         };
         let rrs =
             (settings.roulette == Roulette::Ears).then(|| trainer.train_rrs(tree, &mut stats));
@@ -396,7 +407,8 @@ pub fn render_passes_with<F: SamplerFactory>(
         let job = Job {
             kernel: Kernel::new(scene, &camera, settings, factory, guide, progress)
                 .with_rrs(rrs.as_ref().map(|r| r.kernel()))
-                .with_strip(plan.strip.as_deref()),
+                .with_strip(plan.strip.as_deref())
+                .with_edges(edges, settings.edge_rays),
             settings,
             plan,
             start,
@@ -425,6 +437,31 @@ pub fn render_passes_with<F: SamplerFactory>(
             .map(|s| s.first_vertex_map(scene, &camera, (settings.width, settings.height)));
         Ok(r)
     })?
+}
+
+/// The edge pixels of a render of `settings` under `plan` through `camera` (the image's:
+/// probed on the strip's tiles where it renders a strip), where it spends edge rays; `None`
+/// without them.
+fn edge_map(
+    scene: &Scene,
+    camera: &Camera,
+    settings: &RenderSettings,
+    plan: &PassPlan,
+) -> Option<edges::EdgeMap> {
+    if settings.edge_rays == 0 {
+        return None;
+    }
+    let (image, origins) = match &plan.strip {
+        Some(s) => (s.image, s.origins.clone()),
+        None => {
+            let (w, h) = (settings.width, settings.height);
+            let tiles = (0..h.div_ceil(TILE)).flat_map(|ty| {
+                (0..w.div_ceil(TILE)).map(move |tx| UVec2::new(tx * TILE, ty * TILE))
+            });
+            (UVec2::new(w, h), tiles.collect())
+        }
+    };
+    Some(edges::EdgeMap::new(scene, camera, image, &origins))
 }
 
 /// Whether a guided render of `settings` under `plan` that trains its own guide keeps its

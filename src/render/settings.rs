@@ -42,8 +42,13 @@ pub struct RenderSettings {
     pub reuse: u32,
     /// How paths end and split: classic roulette, or learned (EARS, [`crate::integrator::rrs`]).
     pub roulette: Roulette,
+    /// Camera rays a sample spends on the emission seen directly in a pixel where it varies
+    /// (the edge of a light, of the sun: [`super::edges`]); 0 counts it on the path's own
+    /// camera ray everywhere.
+    pub edge_rays: u32,
 }
 
+pub use super::edges::{DEFAULT_EDGE_RAYS, MAX_EDGE_RAYS};
 pub use crate::integrator::reuse::MAX_REUSE;
 
 /// The replicates of a render that acts on its error estimate (adaptive rounds, a target
@@ -67,6 +72,7 @@ impl Default for RenderSettings {
             replicates: 1,
             reuse: 1,
             roulette: Roulette::Classic,
+            edge_rays: DEFAULT_EDGE_RAYS,
         }
     }
 }
@@ -81,6 +87,7 @@ impl RenderSettings {
             light_points: self.strategy.light_points,
             light_choice: self.strategy.light_choice,
             time_traces: self.time_traces,
+            camera_emission: true,
         }
     }
 
@@ -104,6 +111,12 @@ pub(super) fn camera_for(scene: &Scene, settings: &RenderSettings) -> Result<Cam
         return Err(Error::Settings(
             "width, height, spp and max depth must be at least 1".into(),
         ));
+    }
+    if settings.edge_rays > MAX_EDGE_RAYS {
+        return Err(Error::Settings(format!(
+            "--edge-rays must be 0 (off) to {MAX_EDGE_RAYS}, not {}",
+            settings.edge_rays
+        )));
     }
     if !(1..=MAX_REUSE).contains(&settings.reuse) {
         return Err(Error::Settings(format!(

@@ -16,6 +16,8 @@ pub struct RenderStats {
     pub samples: u64,
     /// Samples dropped because their radiance was NaN or infinite.
     pub nonfinite: u64,
+    /// The pixels where samples spent edge rays (`--edge-rays`; [`super::edges`]).
+    pub edge_pixels: u64,
     /// Wall time summed over the tiles, i.e. over the worker threads (≈ `elapsed` × threads).
     pub thread_time: Duration,
     /// What path guiding's training did (guided directions only); `elapsed`, `rays` and
@@ -237,6 +239,13 @@ impl RenderStats {
             0 => String::new(),
             n => format!(", {n} of them reuse connections"),
         };
+        let edges = match self.rays.edge {
+            0 => String::new(),
+            n => format!(
+                ", {n} of them edge rays in {} edge pixels",
+                self.edge_pixels
+            ),
+        };
         // the light through a mirror or glass after a Phong vertex, where there was any
         let caustic = match self.rays.caustic > 0.0 {
             true => format!(
@@ -248,7 +257,7 @@ impl RenderStats {
         format!(
             "{}: {} triangles, BVH built in {:.1} ms ({:.1} KiB){textures}\n\
              rendered {}x{} at {} spp ({}{reuse}, max depth {}) in {:.3} s: {:.3} M samples/s, {:.2} Mrays/s\n\
-             rays: {} ({} camera, {} bounce, {} shadow{connections}; {:.2} per sample{caustic})\n",
+             rays: {} ({} camera{edges}, {} bounce, {} shadow{connections}; {:.2} per sample{caustic})\n",
             scene.source.display(),
             scene.triangle_count(),
             scene.accel.build_time.as_secs_f64() * 1e3,

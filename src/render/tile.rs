@@ -2,6 +2,7 @@
 //! integrator into the pixel's sums (a pass's range, or in an adaptive round the pixel's own
 //! set), with the stop flag read between pixels and every 256 samples of one.
 
+use super::edges::{seen_by_edge_rays, EdgeMap};
 use super::*;
 use crate::integrator::reuse::{combine, Split, MAX_BLOCK};
 use crate::integrator::rrs::{RrsLearned, RrsPath, RrsRecord, MAX_EXTRA_BRANCHES};
@@ -108,6 +109,8 @@ pub(super) struct Kernel<'a, F: SamplerFactory> {
     width: u32,
     height: u32,
     integrator: IntegratorSettings,
+    /// The same without the camera ray's emission: an edge pixel's paths ([`super::edges`]).
+    integrator_edge: IntegratorSettings,
     factory: &'a F,
     guide: Guiding<'a>,
     progress: &'a dyn Progress,
@@ -118,6 +121,8 @@ pub(super) struct Kernel<'a, F: SamplerFactory> {
     rrs: Option<RrsKernel<'a>>,
     /// The image's tiles the render's pixels show (`None`: the render is the image).
     strip: Option<&'a TileStrip>,
+    /// The image's edge pixels and the edge rays a sample spends in each (`None`: none).
+    edges: Option<(&'a EdgeMap, u32)>,
 }
 
 /// What the tile kernel gives `--roulette ears`'s paths: the learned factors, each pixel's
@@ -156,6 +161,10 @@ impl<'a, F: SamplerFactory> Kernel<'a, F> {
             width: settings.width,
             height: settings.height,
             integrator: settings.integrator(),
+            integrator_edge: IntegratorSettings {
+                camera_emission: false,
+                ..settings.integrator()
+            },
             factory,
             guide,
             progress,
@@ -163,7 +172,52 @@ impl<'a, F: SamplerFactory> Kernel<'a, F> {
             reuse: settings.reuse,
             rrs: None,
             strip: None,
+            edges: None,
         }
+    }
+
+    /// The same kernel with edge rays: `m` a sample in each of `map`'s edge pixels (`None`, or
+    /// `m` = 0: none).
+    pub(super) fn with_edges(self, map: Option<&'a EdgeMap>, m: u32) -> Self {
+        let edges = map.filter(|_| m > 0).map(|e| (e, m));
+        Kernel { edges, ..self }
+    }
+
+    /// How `pixel` (the render's) is sampled: its paths' integrator settings, and the edge rays
+    /// a sample spends there (0: none) with the image's pixel they look through.
+    #[inline]
+    fn edge_rays(&self, pixel: UVec2) -> (&IntegratorSettings, u32, UVec2) {
+        let image = self.strip.map_or(pixel, |s| s.image_pixel(pixel));
+        match self.edges {
+            Some((map, m)) if map.at(image) => (&self.integrator_edge, m, image),
+            _ => (&self.integrator, 0, image),
+        }
+    }
+
+    /// What the edge rays of sample `index` see in the image's pixel `image` (`m` of them;
+    /// zero when `m` is 0), counted in `rays`.
+    #[inline]
+    fn seen(
+        &self,
+        image: UVec2,
+        index: u64,
+        m: u32,
+        rays: &mut RayCounts,
+        stack: &mut TraceStack,
+    ) -> Vec3 {
+        if m == 0 {
+            return Vec3::ZERO;
+        }
+        let e = seen_by_edge_rays(
+            self.scene,
+            self.camera,
+            image,
+            (self.seed, index, m),
+            rays,
+            stack,
+        );
+        rays.mark(crate::integrator::Phase::Camera);
+        e
     }
 
     /// The same kernel rendering the tiles of `strip` (if any) side by side.
@@ -323,6 +377,7 @@ impl<'a, F: SamplerFactory> Kernel<'a, F> {
             };
         }
         let mut splits = vec![Split::new(); n];
+        let mut seen = vec![Vec3::ZERO; n];
         let (mut nonfinite, mut samples) = (0u64, 0u64);
         let image_t = self.strip.map_or(t, |s| s.image_tile(t));
         let steps = count.iter().copied().max().unwrap_or(0);
@@ -338,23 +393,27 @@ impl<'a, F: SamplerFactory> Kernel<'a, F> {
                 }
                 let pixel = UVec2::new(origin.x + q as u32 % size.x, origin.y + q as u32 / size.x);
                 let sampler = &mut samplers[q];
+                let (integrator, m, image) = self.edge_rays(pixel);
                 let ray = self.camera_ray(pixel, first[q] + step, sampler, &mut tile.rays);
                 radiance_split(
                     self.scene,
                     ray,
                     sampler,
-                    &self.integrator,
+                    integrator,
                     &mut tile.rays,
                     &mut tile.stack,
                     self.guide.tree,
                     &mut splits[q],
                 );
+                let (rays, stack) = (&mut tile.rays, &mut tile.stack);
+                seen[q] = self.seen(image, first[q] + step, m, rays, stack);
                 tile.rays.end_path();
             }
             let index = first[0] + step;
             let live = |q: usize| step < count[q];
+            let paths = (&splits[..], &seen[..]);
             let (n_new, bad) =
-                self.combine_blocks((image_t, k, index), &splits, live, &mut tile, &mut added);
+                self.combine_blocks((image_t, k, index), paths, live, &mut tile, &mut added);
             (samples, nonfinite) = (samples + n_new, nonfinite + bad);
         }
         if !tile.cut {
@@ -391,13 +450,14 @@ impl<'a, F: SamplerFactory> Kernel<'a, F> {
     }
 
     /// One sample of a reusing tile after its paths `splits` (one per pixel of `tile`, row
-    /// order): the tile cut into `k × k` blocks on a grid shifted by a hash of the seed, the
-    /// tile `t` and the sample `index`, each block's estimates combined and added to `added`
-    /// for the pixels `live` says take part. The samples added and the non-finite ones.
+    /// order) and what its edge rays saw (`seen`, likewise): the tile cut into `k × k` blocks on
+    /// a grid shifted by a hash of the seed, the tile `t` and the sample `index`, each block's
+    /// estimates combined and added to `added` for the pixels `live` says take part. The
+    /// samples added and the non-finite ones.
     fn combine_blocks(
         &self,
         (t, k, index): (u32, u32, u64),
-        splits: &[Split],
+        (splits, seen): (&[Split], &[Vec3]),
         live: impl Fn(usize) -> bool,
         tile: &mut Tile,
         added: &mut [Sums],
@@ -441,6 +501,7 @@ impl<'a, F: SamplerFactory> Kernel<'a, F> {
                 );
                 for (&q, l) in at[..m].iter().zip(&out[..m]).filter(|(&q, _)| live(q)) {
                     samples += 1;
+                    let l = *l + seen[q];
                     if l.is_finite() {
                         let v = l.as_dvec3();
                         added[q].0 += v;
@@ -469,6 +530,7 @@ impl<'a, F: SamplerFactory> Kernel<'a, F> {
         tile: &mut Tile,
     ) -> Option<Sums> {
         let (mut sum, mut sum_sq, mut n) = from;
+        let (integrator, m, image) = self.edge_rays(pixel);
         for index in range.clone() {
             // a long pixel reads the flag too (every 256 samples: a relaxed load)
             if index % 256 == 255 && stop.is_some_and(|f| f.load(Ordering::Relaxed)) {
@@ -486,27 +548,21 @@ impl<'a, F: SamplerFactory> Kernel<'a, F> {
                 let (rays, stack) = (&mut tile.rays, &mut tile.stack);
                 let guide = self.guide.tree;
                 radiance_rrs(
-                    self.scene,
-                    ray,
-                    sampler,
-                    &self.integrator,
-                    rays,
-                    stack,
-                    guide,
-                    &mut path,
+                    self.scene, ray, sampler, integrator, rays, stack, guide, &mut path,
                 )
             } else {
                 radiance_guided(
                     self.scene,
                     ray,
                     sampler,
-                    &self.integrator,
+                    integrator,
                     &mut tile.rays,
                     &mut tile.stack,
                     self.guide.tree,
                     self.guide.record.then_some(&mut tile.records),
                 )
             };
+            let l = l + self.seen(image, index, m, &mut tile.rays, &mut tile.stack);
             if l.is_finite() {
                 let v = l.as_dvec3();
                 sum += v;

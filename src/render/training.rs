@@ -4,6 +4,7 @@
 //! training memory does not grow with the spp.
 
 use super::combine::KeptIterations;
+use super::edges::EdgeMap;
 use super::*;
 
 /// What a guided render's training needs: the render's scene, camera, settings and plan, and
@@ -14,6 +15,10 @@ pub(super) struct Trainer<'a, F: SamplerFactory> {
     pub(super) settings: &'a RenderSettings,
     pub(super) plan: &'a PassPlan,
     pub(super) factory: &'a F,
+    /// The image's edge pixels, where a training image's samples spend edge rays (a guide
+    /// learned apart sees them too: its paths count the camera's emission as the render's own
+    /// training would, so the guide is the same).
+    pub(super) edges: Option<&'a EdgeMap>,
 }
 
 /// How much a guide's training may spend: its iterations' samples per pixel in all, and the wall
@@ -83,6 +88,7 @@ impl<'a, F: SamplerFactory> Trainer<'a, F> {
         )
         .with_seed(seed)
         .with_strip(self.plan.strip.as_deref())
+        .with_edges(self.edges, self.settings.edge_rays)
     }
 
     /// The training iterations of a guided render (see [`crate::guiding`]): iterations of 1,
@@ -277,6 +283,8 @@ pub fn learn_guide_with(
     with_threads(settings.threads, || {
         let mut stats = RenderStats::default();
         let start = Instant::now();
+        // the edge pixels the render's own training would see: the same guide, bit for bit
+        let edges = super::edge_map(scene, &camera, settings, plan);
         struct Train<'a>(
             &'a Scene,
             &'a Camera,
@@ -285,6 +293,7 @@ pub fn learn_guide_with(
             TrainingBudget,
             Instant,
             &'a mut RenderStats,
+            Option<&'a EdgeMap>,
         );
         impl WithSampler for Train<'_> {
             type Out = Guide;
@@ -295,11 +304,21 @@ pub fn learn_guide_with(
                     settings: self.2,
                     plan: self.3,
                     factory,
+                    edges: self.7,
                 };
                 trainer.train(self.5, self.4, self.6, None)
             }
         }
-        let work = Train(scene, &camera, settings, plan, budget, start, &mut stats);
+        let work = Train(
+            scene,
+            &camera,
+            settings,
+            plan,
+            budget,
+            start,
+            &mut stats,
+            edges.as_ref(),
+        );
         let tree = with_sampler(settings.strategy.sampler, work);
         stats.elapsed = start.elapsed();
         (tree, stats)

@@ -10,6 +10,7 @@ mod cli;
 #[path = "../common/mod.rs"]
 mod common;
 mod custom_sampler;
+mod edges;
 mod environment_map;
 mod error_estimate;
 mod experiments;

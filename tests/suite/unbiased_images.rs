@@ -73,6 +73,9 @@ fn check_all_combinations(name: &str, scene: &Scene, max_depth: u32) {
         height: 8,
         spp: 32768,
         max_depth,
+        // the estimators under test alone (edge rays, which change only what the camera sees
+        // along a light's edge, the same way under every strategy, are tested in edges.rs)
+        edge_rays: 0,
         ..Default::default()
     };
     let reference = |sampler, directions, seed| {
@@ -414,6 +417,7 @@ fn shipped_cornell_box_agrees_for_every_light_strategy() {
         height: w,
         spp: 16384,
         max_depth: 8,
+        edge_rays: 0, // the estimators alone, as in `check_all_combinations`
         ..Default::default()
     };
     let (reference, _) = render_quiet(
@@ -508,6 +512,7 @@ fn glossy_plates_agree_for_every_light_choice() {
         height: 12,
         spp: 16384,
         max_depth: 4,
+        edge_rays: 0, // the estimators alone, as in `check_all_combinations`
         ..Default::default()
     };
     let (reference, _) = render_quiet(

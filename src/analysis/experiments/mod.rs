@@ -310,6 +310,9 @@ fn run_settings(st: &Entry, s: &ExperimentSettings, spp: u32, seed: u64) -> Rend
         replicates: st.replicates,
         reuse: st.reuse,
         roulette: crate::integrator::rrs::Roulette::Classic,
+        // the strategy's own points everywhere: edge rays bring Sobol points of their own to
+        // the light's edges, whatever sampler the experiment compares
+        edge_rays: 0,
     }
 }
 
