@@ -276,16 +276,21 @@ EFFICIENCY_CONFIGS = [("default", []), ("--replicates 4", ["--replicates", 4]),
                       ("--lights nee", ["--lights", "nee"]),
                       ("--light-points area", ["--light-points", "area"]),
                       ("--light-points projected", ["--light-points", "projected"]),
-                      ("--light-choice power", ["--light-choice", "power"])]
+                      ("--light-choice power", ["--light-choice", "power"]),
+                      ("--edge-rays 0", ["--edge-rays", 0]), ("--edge-rays 32", ["--edge-rays", 32])]
 
 
 def efficiency_ref(scene, w, h, spp=4096):
     """An independent-points reference: its per-sample variance of the mean is unbiased, so it
-    is the floor that `vrpt diff` prints ("reference variance") and the measured MSE sheds.
+    is the floor that `vrpt diff` prints ("reference variance") and the measured MSE sheds. With
+    64 edge rays: without them the reference's own noise at a light's edge (one camera ray a
+    sample sees the light or not) exceeds the error of a render with them (on checker-plane its
+    MSE less the floor came out negative); with them the edge term's per-sample variance is
+    1/64 or less of that, so the floor it overstates (its points are stratified) is negligible.
     Solid-angle points (not area): an environment map is then sampled by its luminance."""
     return cached_render(f"eff-{scene}-{w}x{h}", f"scenes/{scene}", "--width", w, "--height", h, "--spp", spp,
                          "--sampler", "independent", "--light-points", "solid-angle", "--light-choice", "power",
-                         "--seed", 4242)
+                         "--edge-rays", 64, "--seed", 4242)
 
 
 def measure_efficiency(configs, scenes=EFFICIENCY_SCENES, spp=64, seeds=(1, 2, 3, 4, 5), env=None):
@@ -343,7 +348,7 @@ def efficiency():
 def long_ref(scene, w, h, spp):
     """A long independent-points phong+MIS reference whose own variance `vrpt diff` subtracts."""
     return cached_render(f"ref-{scene}-{w}x{h}-{spp}", f"scenes/{scene}", "--width", w, "--height", h,
-                         "--spp", spp, "--sampler", "independent", "--seed", 4242)
+                         "--spp", spp, "--sampler", "independent", "--edge-rays", 0, "--seed", 4242)
 
 
 def equal_time(scene, w, h, seconds, ref, configs, seeds=(1, 2, 3), metric="MSE"):

@@ -88,6 +88,7 @@ NAME = "mitsuba-cornell"
 # vrpt's default.
 VRPT_STRATEGIES = [
     ("vrpt mis (stratified+phong+mis)", "mis"),
+    ("vrpt mis --edge-rays 0 (before edge rays)", "mis --edge-rays 0"),
     ("vrpt mis --reuse 2", "mis --reuse 2"),
     ("vrpt mis --reuse 3", "mis --reuse 3"),
     ("vrpt mis --reuse 4", "mis --reuse 4"),
