@@ -4,14 +4,15 @@
 //! A pixel's value is `I = ∫ (E(u) + R(u)) du` over its area (`u ∈ [0,1)²`, the box filter),
 //! with `E(u)` what the camera ray through `u` sees directly (a light's emission from its front,
 //! the environment where it escapes) and `R(u)` the rest of the path. Where `E` varies across
-//! the pixel (along the edge of a light, of the sun, at the horizon) it is a step whose height is
-//! the light's whole radiance, and a path sees one side or the other: on Mitsuba's Cornell box
+//! the pixel (along the edge of a light, of the sun's disc) it is a step whose height is the
+//! light's whole radiance, and a path sees one side or the other: on Mitsuba's Cornell box
 //! (256², 64 spp) the 0.3% of pixels along the light's edge carry 23% of the default's MSE and
 //! 66% of `--reuse 4`'s. There each sample estimates the two terms apart: `E` by the mean over
 //! `M` camera rays of its own, which look for nothing but what they see ([`seen_emission`]: a
 //! closest hit each, no shading, no light sample), and `R` by the path, whose camera ray no
-//! longer counts what it sees ([`crate::integrator::IntegratorSettings::camera_emission`]). Both estimates are
-//! unbiased, so their sum is.
+//! longer counts what it sees
+//! ([`crate::integrator::IntegratorSettings::camera_emission`]). Both estimates are unbiased,
+//! so their sum is.
 //!
 //! The `M` points of sample `s` are points `s·M … s·M + M − 1` of the pixel's own
 //! Owen-scrambled Sobol sequence in its first two dimensions (a (0,2)-sequence; Burley 2020,
@@ -28,14 +29,15 @@
 //! its neighbours, differ in some channel by more than [`EDGE_CONTRAST`] of the largest value
 //! (a sky's gradient is not an edge) and one of them saw a light, or all of them saw the sky and
 //! the step is a light in it ([`SKY_STEP`]): an edge between two neighbouring probes lies in one
-//! of the two pixels they belong to, and both are flagged. Why a light or only sky: splitting pays where `R` is small on both
-//! sides of the step (a light's own reflection, or nothing past the sky), and can lose where
-//! it is not: at a roof against a bright sky the sum `E + R` steps little (the lit roof is
-//! about as bright as the sky) while `R` alone steps by the roof's whole radiance. On
-//! `scenes/sun-sky` such silhouettes and the sky map's texel steps were 389 of 12288 pixels,
-//! and split there its MSE did not move (1.254e-4 against 1.253e-4) while its time grew. A light smaller than half a pixel can fall
-//! between the probes; its pixels keep the plain estimator. The probe costs four closest-hit
-//! rays a pixel (a tile's ring included, ~5), once per render.
+//! of the two pixels they belong to, and both are flagged. Why a light or only sky: splitting
+//! pays where `R` is small on both sides of the step (a light's own reflection, or nothing past
+//! the sky), and can lose where it is not: at a roof against a bright sky the sum `E + R` steps
+//! little (the lit roof is about as bright as the sky) while `R` alone steps by the roof's whole
+//! radiance. On `scenes/sun-sky` such silhouettes and the sky map's texel steps were 389 of
+//! 12288 pixels, and split there its MSE did not move (1.254e-4 against 1.253e-4) while its
+//! time grew. A light smaller than half a pixel can fall between the probes; its pixels keep
+//! the plain estimator. The probe costs four closest-hit rays a pixel (a tile's ring included,
+//! ~5), once per render.
 
 use super::TILE;
 use crate::accel::TraceStack;

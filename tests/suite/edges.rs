@@ -109,7 +109,7 @@ fn edge_rays_agree_with_the_path_tracer() {
         let base = RenderSettings {
             width: w,
             height: h,
-            spp: 256,
+            spp: 128,
             ..RenderSettings::for_scene(&scene)
         };
         let (reference, _) = render_quiet(

@@ -180,6 +180,10 @@ fn render(spp: u32, seed: u64, strategy: &str, out: &Path) -> RgbImage {
         strategy,
         "--replicates",
         "1",
+        // as `vrpt compare` and `converge` run a strategy: without edge rays (their experiments
+        // weigh the samplers and strategies alone; `analysis::experiments`)
+        "--edge-rays",
+        "0",
         "-q",
         "-o",
         out.to_str().unwrap(),

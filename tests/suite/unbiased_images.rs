@@ -608,6 +608,7 @@ fn guided_directions_agree_on_the_cornell_box_the_door_and_through_glass() {
             height: h,
             spp: 4096,
             max_depth,
+            edge_rays: 0, // the estimators alone, as in `check_all_combinations`
             ..Default::default()
         };
         let (reference, _) = render_quiet(
