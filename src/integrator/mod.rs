@@ -51,6 +51,8 @@ mod direct;
 mod recorder;
 pub mod reuse;
 pub mod rrs;
+mod seen;
+pub use seen::{seen, seen_emission, Seen};
 
 pub use branching::MAX_RRS_DEPTH;
 pub use recorder::MAX_RECORDED_BOUNCES;
@@ -94,54 +96,6 @@ pub struct IntegratorSettings {
     /// hits, or the environment where it escapes). Off for a pixel whose seen emission is
     /// estimated apart, by rays of its own ([`seen_emission`], `--edge-rays`).
     pub camera_emission: bool,
-}
-
-/// What a camera ray meets first ([`seen`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Seen {
-    /// A surface that emits nothing toward it (it may reflect light: a path goes on there).
-    Surface,
-    /// The front of an emitting surface.
-    Light,
-    /// Nothing: it escapes to the environment (nothing goes on).
-    Sky,
-}
-
-/// What the camera sees directly along `ray` (unit direction) and what it meets: the
-/// environment's radiance where it escapes, what the surface it hits emits toward it (from its
-/// front only), else zero: exactly the term a path's camera ray adds
-/// ([`IntegratorSettings::camera_emission`]). The ray is counted as a camera ray and an edge ray
-/// in `rays`.
-#[inline]
-pub fn seen(
-    scene: &Scene,
-    (origin, dir): (Vec3, Vec3),
-    rays: &mut RayCounts,
-    stack: &mut TraceStack,
-) -> (Vec3, Seen) {
-    rays.camera += 1;
-    rays.edge += 1;
-    let Some(hit) = scene.intersect(stack, origin, dir, f32::INFINITY) else {
-        return (scene.environment().radiance(dir), Seen::Sky);
-    };
-    let s = scene.surface(&hit);
-    let m = scene.material_at(&s);
-    if m.is_emissive() && s.ng.dot(-dir) > 0.0 {
-        (m.emission, Seen::Light)
-    } else {
-        (Vec3::ZERO, Seen::Surface)
-    }
-}
-
-/// The emission [`seen`] along `ray`.
-#[inline]
-pub fn seen_emission(
-    scene: &Scene,
-    ray: (Vec3, Vec3),
-    rays: &mut RayCounts,
-    stack: &mut TraceStack,
-) -> Vec3 {
-    seen(scene, ray, rays, stack).0
 }
 
 /// The power heuristic (β = 2) of Veach & Guibas 1995 for a sample drawn by the strategy of pdf

@@ -1,0 +1,56 @@
+//! What the camera sees directly: the one term of a path that `--edge-rays` estimates apart
+//! ([`crate::render::edges`]), here so that its rays and the path's camera ray read the scene
+//! the same way.
+
+use super::RayCounts;
+use crate::accel::TraceStack;
+use crate::scene::Scene;
+use glam::Vec3;
+
+/// What a camera ray meets first ([`seen`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Seen {
+    /// A surface that emits nothing toward it (it may reflect light: a path goes on there).
+    Surface,
+    /// The front of an emitting surface.
+    Light,
+    /// Nothing: it escapes to the environment (nothing goes on).
+    Sky,
+}
+
+/// What the camera sees directly along `ray` (unit direction) and what it meets: the
+/// environment's radiance where it escapes, what the surface it hits emits toward it (from its
+/// front only), else zero: exactly the term a path's camera ray adds
+/// ([`super::IntegratorSettings::camera_emission`]). The ray is counted as a camera ray and an
+/// edge ray in `rays`.
+#[inline]
+pub fn seen(
+    scene: &Scene,
+    (origin, dir): (Vec3, Vec3),
+    rays: &mut RayCounts,
+    stack: &mut TraceStack,
+) -> (Vec3, Seen) {
+    rays.camera += 1;
+    rays.edge += 1;
+    let Some(hit) = scene.intersect(stack, origin, dir, f32::INFINITY) else {
+        return (scene.environment().radiance(dir), Seen::Sky);
+    };
+    let s = scene.surface(&hit);
+    let m = scene.material_at(&s);
+    if m.is_emissive() && s.ng.dot(-dir) > 0.0 {
+        (m.emission, Seen::Light)
+    } else {
+        (Vec3::ZERO, Seen::Surface)
+    }
+}
+
+/// The emission [`seen`] along `ray`.
+#[inline]
+pub fn seen_emission(
+    scene: &Scene,
+    ray: (Vec3, Vec3),
+    rays: &mut RayCounts,
+    stack: &mut TraceStack,
+) -> Vec3 {
+    seen(scene, ray, rays, stack).0
+}
