@@ -376,23 +376,6 @@ pub fn render_passes_with<F: SamplerFactory>(
             stats.guide = Some(l.stats);
         }
         let mut kept = keeps_training(settings, plan).then(combine::KeptIterations::default);
-        let tree = (guided && learned.is_none()).then(|| {
-            let trainer = Trainer {
-                scene,
-                camera: &camera,
-                settings,
-                plan,
-                factory,
-                edges,
-            };
-            let budget = TrainingBudget::of_render(settings, plan);
-            trainer.train(start, budget, &mut stats, kept.as_mut())
-        });
-        let tree = learned.map(|l| &l.tree).or(tree.as_ref());
-        let guide = Guiding {
-            tree,
-            record: false,
-        };
         let trainer = Trainer {
             scene,
             camera: &camera,
@@ -400,6 +383,15 @@ pub fn render_passes_with<F: SamplerFactory>(
             plan,
             factory,
             edges,
+        };
+        let tree = (guided && learned.is_none()).then(|| {
+            let budget = TrainingBudget::of_render(settings, plan);
+            trainer.train(start, budget, &mut stats, kept.as_mut())
+        });
+        let tree = learned.map(|l| &l.tree).or(tree.as_ref());
+        let guide = Guiding {
+            tree,
+            record: false,
         };
         let rrs =
             (settings.roulette == Roulette::Ears).then(|| trainer.train_rrs(tree, &mut stats));

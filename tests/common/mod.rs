@@ -135,6 +135,48 @@ pub fn assert_one_line_error(out: &Output, what: &str, expect: &str) {
     assert_refused(out, what, &[expect]);
 }
 
+/// Two 8×8, 2-spp renders of the Cornell box into `dir`, with `flag` at the values `a` and
+/// `b` (and seeds 1 and 2), then their merge, which must be refused in one line holding every
+/// string of `expect`, writing nothing. The first render's path is returned (for its metadata).
+pub fn assert_merge_refused(
+    dir: &Path,
+    flag: &str,
+    (a, b): (&str, &str),
+    expect: &[&str],
+) -> PathBuf {
+    let scene = cornell_path();
+    let (pa, pb, m) = (dir.join("a.exr"), dir.join("b.exr"), dir.join("m.exr"));
+    for (out, value, seed) in [(&pa, a, "1"), (&pb, b, "2")] {
+        vrpt_ok(&[
+            "render",
+            scene.to_str().unwrap(),
+            "--width",
+            "8",
+            "--height",
+            "8",
+            "--spp",
+            "2",
+            "--seed",
+            seed,
+            flag,
+            value,
+            "-q",
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+    }
+    let out = vrpt(&[
+        "merge",
+        pa.to_str().unwrap(),
+        pb.to_str().unwrap(),
+        "-o",
+        m.to_str().unwrap(),
+    ]);
+    assert_refused(&out, &format!("merge {flag} {a} and {b}"), expect);
+    assert!(!m.exists(), "a refused merge wrote {}", m.display());
+    pa
+}
+
 /// Independent uniform points of the unit square from `seed`.
 pub fn uniform_pairs(seed: u64) -> impl FnMut() -> glam::Vec2 {
     use rand::{rngs::SmallRng, Rng, SeedableRng};

@@ -210,41 +210,9 @@ fn edge_rays_flag_is_checked_and_recorded() {
     let out = common::vrpt(&["render", cornell.to_str().unwrap(), "--edge-rays", "1000"]);
     common::assert_one_line_error(&out, "--edge-rays 1000", "--edge-rays");
     let dir = tempfile::tempdir().unwrap();
-    let scene = common::cornell_path();
-    let (a, b, m) = (
-        dir.path().join("a.exr"),
-        dir.path().join("b.exr"),
-        dir.path().join("m.exr"),
-    );
-    for (out, edge, seed) in [(&a, "8", "1"), (&b, "0", "2")] {
-        common::vrpt_ok(&[
-            "render",
-            scene.to_str().unwrap(),
-            "--width",
-            "8",
-            "--height",
-            "8",
-            "--spp",
-            "2",
-            "--seed",
-            seed,
-            "--edge-rays",
-            edge,
-            "-q",
-            "-o",
-            out.to_str().unwrap(),
-        ]);
-    }
+    let refusal = ["edge_rays is 0 (off) but"];
+    let a = common::assert_merge_refused(dir.path(), "--edge-rays", ("8", "0"), &refusal);
     let img = vrpt::image_io::read_exr(&a).unwrap();
     let meta = vrpt::output::RenderMetadata::from_attributes(&img.metadata).unwrap();
     assert_eq!(meta.edge_rays, 8);
-    let out = common::vrpt(&[
-        "merge",
-        a.to_str().unwrap(),
-        b.to_str().unwrap(),
-        "-o",
-        m.to_str().unwrap(),
-    ]);
-    common::assert_one_line_error(&out, "merge edge rays 8 and 0", "edge_rays is 0 (off) but");
-    assert!(!m.exists());
 }

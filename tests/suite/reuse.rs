@@ -231,39 +231,6 @@ fn reuse_gives_the_same_image_on_any_number_of_threads() {
 #[test]
 fn renders_with_other_reuse_do_not_merge() {
     let dir = tempfile::tempdir().unwrap();
-    let scene = common::cornell_path();
-    let (a, b, m) = (
-        dir.path().join("a.exr"),
-        dir.path().join("b.exr"),
-        dir.path().join("m.exr"),
-    );
-    for (out, reuse, seed) in [(&a, "1", "1"), (&b, "2", "2")] {
-        common::vrpt_ok(&[
-            "render",
-            scene.to_str().unwrap(),
-            "--width",
-            "8",
-            "--height",
-            "8",
-            "--spp",
-            "2",
-            "--seed",
-            seed,
-            "--reuse",
-            reuse,
-            "-q",
-            "-o",
-            out.to_str().unwrap(),
-        ]);
-    }
-    let out = common::vrpt(&[
-        "merge",
-        a.to_str().unwrap(),
-        b.to_str().unwrap(),
-        "-o",
-        m.to_str().unwrap(),
-    ]);
-    common::assert_one_line_error(&out, "merge reuse 1 and 2", "reuse is 2 but");
-    assert!(String::from_utf8_lossy(&out.stderr).contains("1 (off)"));
-    assert!(!m.exists());
+    let refusal = ["reuse is 2 but", "1 (off)"];
+    common::assert_merge_refused(dir.path(), "--reuse", ("1", "2"), &refusal);
 }
