@@ -279,8 +279,8 @@ def render(
     ``summary`` and ``metadata["auto"]``), and ``sampler``, ``directions`` (``guided`` for path
     guiding), ``lights``, ``light_points``, ``light_choice`` set one part of it. ``roulette`` is
     ``classic`` or ``ears`` (efficiency-aware roulette and splitting, learned while rendering).
-    ``edge_rays`` is how many camera rays a sample spends on the emission seen directly in a
-    pixel along the edge of a light (default 16; 0: off).
+    ``edge_rays`` is the most camera rays a sample spends on the emission seen directly in a
+    pixel along the edge of a light, each pixel's count chosen by a pilot (default 256; 0: off).
     ``training_images`` (guided directions only) is ``keep`` (the default: the last training
     iterations are combined into the image by inverse variance) or ``discard``.
     ``sampler`` may also be a function of your own (see ``SamplerFunction``): slow, since Python

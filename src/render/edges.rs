@@ -1,5 +1,5 @@
 //! Edge rays (`--edge-rays M`): the emission a pixel sees directly, estimated apart in the
-//! pixels where it varies.
+//! pixels where it varies, by as many rays (at most `M`) as its variance asks.
 //!
 //! A pixel's value is `I = ∫ (E(u) + R(u)) du` over its area (`u ∈ [0,1)²`, the box filter),
 //! with `E(u)` what the camera ray through `u` sees directly (a light's emission from its front,
@@ -38,22 +38,40 @@
 //! time grew. A light smaller than half a pixel can fall between the probes; its pixels keep
 //! the plain estimator. The probe costs four closest-hit rays a pixel (a tile's ring included,
 //! ~5), once per render.
+//!
+//! How many (`M_i` in edge pixel `i`, at most `--edge-rays`): with `a_i` the variance of one
+//! edge ray's `E` there, `b_j` a pixel's path variance and `c_e`, `c_p` the costs of an edge ray
+//! and a path, the image's MSE times its time over `N` samples is `(Σ a_i/M_i + B)(C + c_e Σ M_i)`
+//! with `B = Σ b_j` and `C = P·c_p` over the `P` pixels, least at `M_i = λ√a_i`, `λ = √(C/(c_e B))`.
+//! A pilot after the probe estimates them, on fixed points no sample uses: `a_i` from
+//! [`PILOT_EDGE_RAYS`] edge rays in each edge pixel (at least the variance of the window's step
+//! seen by one ray in 32: a pilot that saw one side only), `B` from two independent unguided
+//! paths in one pixel in 16 (`(x₁ − x₂)²/2`), `c_p/c_e` as twice a pilot path's rays. Where the
+//! paths hardly vary (`B` near 0: a scene that is all emission) `λ` is bounded so the edge rays
+//! cost at most [`EDGE_COST`] times the paths. The counts are fixed before any sample (and the
+//! same on any number of threads), so each pixel's estimator stays unbiased whatever it gets.
+//! The pilot costs about 1/8 of a sample a pixel and 16 rays an edge pixel.
 
 use super::TILE;
 use crate::accel::TraceStack;
+use crate::bsdf::Directions;
 use crate::camera::Camera;
-use crate::integrator::{seen, seen_emission, RayCounts, Seen};
+use crate::integrator::{radiance, seen, seen_emission, IntegratorSettings, RayCounts, Seen};
 use crate::math::hash_words;
+use crate::sampler::layout::CameraSample;
+use crate::sampler::{IndependentSampler, Sampler};
 use crate::scene::Scene;
 use glam::{UVec2, Vec2, Vec3};
 use rayon::prelude::*;
 use std::f64::consts::PI;
 
-/// The default `--edge-rays`: over the shipped scenes at 64 spp (`tools/readme_numbers.py`'s
-/// efficiency recipe), 16 was 1.14× as efficient as 8 in the geometric mean (textured 2.0×, the
-/// glossy plates 1.5×; elsewhere within the timing's noise) and 32 1.07× (checker-plane 0.8×,
-/// where every sample is a camera ray and the edge rays are most of the cost).
-pub const DEFAULT_EDGE_RAYS: u32 = 16;
+/// The default `--edge-rays`, the most a sample spends in a pixel: the allocation (see the
+/// module doc) decides below it. Against 16 in every edge pixel (the default before), over the
+/// shipped scenes at 64 spp (`tools/readme_numbers.py`'s efficiency recipe, seeds 1–4,
+/// interleaved): textured 5.7× as efficient, glossy plates 1.18×, checker-plane 1.04×,
+/// lit-checker 0.90×, the rest 0.95–1.06× (no edge pixel in the door and the sky scene: noise);
+/// 1.25× in the geometric mean.
+pub const DEFAULT_EDGE_RAYS: u32 = 256;
 
 /// The largest `--edge-rays`.
 pub const MAX_EDGE_RAYS: u32 = 256;
@@ -69,63 +87,121 @@ pub const EDGE_CONTRAST: f32 = 0.25;
 /// at [`EDGE_CONTRAST`] alone cost 7–10% of the time and left the MSE where it was, 1.253e-4).
 pub const SKY_STEP: f32 = 10.0;
 
-/// Which of an image's pixels see an edge of emission (see the module doc).
+/// Which of an image's pixels see an edge of emission, and how many edge rays a sample spends
+/// in each (see the module doc).
 pub(super) struct EdgeMap {
     width: u32,
-    edge: Vec<bool>,
+    /// Edge rays a sample in each pixel (0: not an edge pixel), row-major.
+    rays_at: Vec<u16>,
     /// How many pixels are edge pixels.
     pub(super) count: u64,
-    /// The probe's rays.
+    /// The probe's rays (the pilot's paths' too).
     pub(super) rays: RayCounts,
+}
+
+/// What the allocation of edge rays is computed from (see the module doc): the render's seed
+/// (the pilot's points are keyed by it, apart from every sample's), its integrator (the
+/// pilot's paths, their directions unguided) and the most edge rays a sample spends.
+#[derive(Clone, Copy)]
+pub(super) struct Allocation {
+    pub(super) seed: u64,
+    pub(super) integrator: IntegratorSettings,
+    pub(super) most: u32,
+}
+
+/// What one tile's probe found: per pixel (row by row) whether it is an edge pixel and the
+/// variance `a` of one edge ray's estimate there (mean over channels; 0 elsewhere), and its
+/// pilot paths: their number, rays, and the sum of their pixels' variance estimates.
+struct TileProbe {
+    flags: Vec<bool>,
+    a: Vec<f32>,
+    paths: u64,
+    path_rays: u64,
+    b: f64,
 }
 
 impl EdgeMap {
     /// The map of the `image`-sized image seen through `camera`, probed on the tiles whose
-    /// top-left pixels are `origins` (the rest of the image reads as no edge).
-    pub(super) fn new(scene: &Scene, camera: &Camera, image: UVec2, origins: &[UVec2]) -> Self {
-        let tiles: Vec<(UVec2, Vec<bool>, RayCounts)> = origins
+    /// top-left pixels are `origins` (the rest of the image reads as no edge), with its edge
+    /// rays allocated by `alloc`.
+    pub(super) fn new(
+        scene: &Scene,
+        camera: &Camera,
+        image: UVec2,
+        origins: &[UVec2],
+        alloc: Allocation,
+    ) -> Self {
+        let tiles: Vec<(UVec2, TileProbe, RayCounts)> = origins
             .par_iter()
             .map(|&o| {
                 let mut rays = RayCounts::default();
-                let flags = tile_edges(scene, camera, image, o, &mut rays);
-                (o, flags, rays)
+                let probe = tile_edges(scene, camera, (image, o), alloc, &mut rays);
+                (o, probe, rays)
             })
             .collect();
         let mut map = EdgeMap {
             width: image.x,
-            edge: vec![false; (image.x * image.y) as usize],
+            rays_at: vec![0; (image.x * image.y) as usize],
             count: 0,
             rays: RayCounts::default(),
         };
-        for (o, flags, rays) in tiles {
+        let (mut paths, mut path_rays, mut b, mut pixels, mut s) = (0, 0, 0.0, 0, 0.0);
+        for (_, t, rays) in &tiles {
+            (paths, path_rays, b) = (paths + t.paths, path_rays + t.path_rays, b + t.b);
+            pixels += t.flags.len() as u64;
+            s += t.a.iter().map(|&a| (a as f64).sqrt()).sum::<f64>();
+            map.rays.add(rays);
+        }
+        let lambda = allocation_scale(pixels, (paths, path_rays, b), s);
+        for (o, t, _) in &tiles {
             let w = TILE.min(image.x - o.x);
-            for (k, &f) in flags.iter().enumerate() {
+            for (k, (&f, &a)) in t.flags.iter().zip(&t.a).enumerate() {
                 let (x, y) = (o.x + k as u32 % w, o.y + k as u32 / w);
-                map.edge[(y * image.x + x) as usize] = f;
+                let m = if f {
+                    let m = (lambda * (a as f64).sqrt()).round();
+                    m.clamp(1.0, alloc.most as f64) as u16
+                } else {
+                    0
+                };
+                map.rays_at[(y * image.x + x) as usize] = m;
                 map.count += f as u64;
             }
-            map.rays.add(&rays);
         }
         map
     }
 
-    /// Whether the image's pixel `p` is an edge pixel.
+    /// The edge rays a sample spends in the image's pixel `p` (0: not an edge pixel).
     #[inline]
-    pub(super) fn at(&self, p: UVec2) -> bool {
-        self.edge[(p.y * self.width + p.x) as usize]
+    pub(super) fn at(&self, p: UVec2) -> u32 {
+        self.rays_at[(p.y * self.width + p.x) as usize] as u32
     }
 }
 
-/// The edge flags of the tile at `o` of an `image`-sized image, row by row: its pixels and the
-/// ring of pixels around it probed at the centres of their quarters, then each pixel's 4×4
-/// window of probes compared.
+/// `λ` of the allocation `M_i = λ·√a_i` (see the module doc), from the `pixels` probed, the
+/// pilot's `paths` (their `rays`), the sum `b` of their pixels' variance estimates and the sum
+/// `s` of the edge pixels' `√a_i`: `√(C / (c_e·B))` with `C = P·c_p` the paths' cost a sample
+/// and `B ≈ b·P/(paths/2)` their variance (two paths a pilot pixel), but at most `C/(c_e·S)`,
+/// where the edge rays cost as much as the paths; a path costs `c_p/c_e = 2 × its rays` edge
+/// rays (a ray that shades and samples a light against one that only looks).
+fn allocation_scale(pixels: u64, (paths, rays, b): (u64, u64, f64), s: f64) -> f64 {
+    if paths == 0 || s == 0.0 {
+        return 0.0;
+    }
+    let cost = pixels as f64 * 2.0 * (rays as f64 / paths as f64).max(1.0);
+    let big_b = b * pixels as f64 / (paths as f64 / 2.0);
+    (cost / big_b).sqrt().min(EDGE_COST * cost / s)
+}
+
+/// The probe of the tile at `o` of an `image`-sized image: its pixels and the ring of pixels
+/// around it probed at the centres of their quarters, each pixel's 4×4 window of probes
+/// compared (its flag), then the pilot of the allocation `alloc` (see the module doc).
 fn tile_edges(
     scene: &Scene,
     camera: &Camera,
-    image: UVec2,
-    o: UVec2,
+    (image, o): (UVec2, UVec2),
+    alloc: Allocation,
     rays: &mut RayCounts,
-) -> Vec<bool> {
+) -> TileProbe {
     let end = (o + UVec2::splat(TILE)).min(image);
     let sky_step = SKY_STEP * (scene.environment().luminance_integral() / (4.0 * PI)) as f32;
     // the probed pixels: the tile and its ring, within the image
@@ -141,6 +217,7 @@ fn tile_edges(
         }
     }
     let mut flags = Vec::with_capacity(((end.x - o.x) * (end.y - o.y)) as usize);
+    let mut steps = Vec::with_capacity(flags.capacity());
     for y in o.y..end.y {
         for x in o.x..end.x {
             // the window: probe columns 2x − 1 ..= 2x + 2 of the image, clipped to the probed
@@ -161,9 +238,92 @@ fn tile_edges(
             let step = (max - min).max_element();
             let edge = step > EDGE_CONTRAST * max.max_element();
             flags.push(edge && (light || (sky && step > sky_step)));
+            // the step's mean over the channels, as the edge rays' variance is taken
+            steps.push((max - min).element_sum() / 3.0);
         }
     }
-    flags
+    pilot(scene, camera, (o, end), (flags, steps), alloc, rays)
+}
+
+/// The most the edge rays may cost against the paths, a sample (where the paths vary little,
+/// [`allocation_scale`]'s optimum would spend without end for what it gains).
+const EDGE_COST: f64 = 4.0;
+
+/// Pilot pixels: one in [`PILOT_STRIDE`]² of the image traces two paths.
+const PILOT_STRIDE: u32 = 4;
+
+/// Edge rays the pilot traces in an edge pixel to estimate one's variance.
+const PILOT_EDGE_RAYS: u32 = 16;
+
+/// The pilot of the tile from `o` to `end` (exclusive), its edge `flags` found: in each edge
+/// pixel [`PILOT_EDGE_RAYS`] edge rays at scrambled Sobol points of a key no sample uses, their
+/// variance `a` (mean over channels); in each pilot pixel two independent paths of `alloc`'s
+/// integrator (unguided; an edge pixel's without the camera's emission, as its samples'), the
+/// variance estimate `(x₁ − x₂)²/2` (mean over channels) summed.
+fn pilot(
+    scene: &Scene,
+    camera: &Camera,
+    (o, end): (UVec2, UVec2),
+    (flags, step): (Vec<bool>, Vec<f32>),
+    alloc: Allocation,
+    rays: &mut RayCounts,
+) -> TileProbe {
+    let mut stack = TraceStack::default();
+    let w = end.x - o.x;
+    let seed = alloc.seed ^ 0x5049_4c4f_5420_4544;
+    let mut a = vec![0.0f32; flags.len()];
+    for (k, _) in flags.iter().enumerate().filter(|(_, &f)| f) {
+        let pixel = o + UVec2::new(k as u32 % w, k as u32 / w);
+        let (mut sum, mut sum2) = (Vec3::ZERO, Vec3::ZERO);
+        for j in 0..PILOT_EDGE_RAYS {
+            let e = seen_by_edge_rays(scene, camera, pixel, (seed, j as u64, 1), rays, &mut stack);
+            (sum, sum2) = (sum + e, sum2 + e * e);
+        }
+        let n = PILOT_EDGE_RAYS as f32;
+        let var = (sum2 - sum * sum / n) / (n - 1.0);
+        // at least the variance of the window's step seen by one ray in 2n (a pilot that
+        // saw one side only: the pixel is flagged, the other side is there)
+        let floor = step[k] * step[k] * (1.0 - 0.5 / n) * 0.5 / n;
+        a[k] = (var.max(Vec3::ZERO).element_sum() / 3.0).max(floor);
+    }
+    let mut integrator = alloc.integrator;
+    if integrator.directions == Directions::Guided {
+        integrator.directions = Directions::Phong;
+    }
+    let no_camera = IntegratorSettings {
+        camera_emission: false,
+        ..integrator
+    };
+    let mut sampler = IndependentSampler::new(seed);
+    let (mut paths, mut path_rays, mut b) = (0u64, 0u64, 0.0f64);
+    for y in (o.y..end.y).filter(|y| y % PILOT_STRIDE == 0) {
+        for x in (o.x..end.x).filter(|x| x % PILOT_STRIDE == 0) {
+            let (pixel, k) = (UVec2::new(x, y), ((y - o.y) * w + x - o.x) as usize);
+            let settings = if flags[k] { &no_camera } else { &integrator };
+            let mut l = [Vec3::ZERO; 2];
+            for (index, l) in l.iter_mut().enumerate() {
+                let mut counts = RayCounts::default();
+                sampler.start_pixel_sample(pixel, index as u32);
+                let u = CameraSample::draw(&mut sampler).pixel;
+                let ray = camera.generate_ray(pixel, u);
+                *l = radiance(scene, ray, &mut sampler, settings, &mut counts, &mut stack);
+                path_rays += counts.total();
+                rays.add(&counts);
+            }
+            let d = l[0] - l[1];
+            if d.is_finite() {
+                b += (d * d).element_sum() as f64 / 6.0;
+                paths += 2;
+            }
+        }
+    }
+    TileProbe {
+        flags,
+        a,
+        paths,
+        path_rays,
+        b,
+    }
 }
 
 /// The estimate, by `m` edge rays, of what the camera sees directly in the image's pixel
@@ -214,6 +374,35 @@ mod tests {
     use crate::render::settings::camera_for;
     use crate::render::RenderSettings;
 
+    /// `λ` minimises `(S/λ + B)(C + c_e λ S)` (the image's MSE × time with `M_i = λ√a_i`, in
+    /// units of `c_e`) where the cost bound does not bind: the product is lower there than at
+    /// 0.8λ and 1.25λ; where `B` is 0 the edge rays cost [`EDGE_COST`] times the paths.
+    #[test]
+    fn the_allocation_is_the_optimum_of_mse_times_time() {
+        let f = |lambda: f64, (pixels, paths, rays, b): (u64, u64, u64, f64), s: f64| {
+            let c = pixels as f64 * 2.0 * rays as f64 / paths as f64;
+            let big_b = b * pixels as f64 / (paths as f64 / 2.0);
+            (s / lambda + big_b) * (c + lambda * s)
+        };
+        for (pilot, s) in [
+            ((12288, 1536, 4600, 2.0), 40.0),
+            ((49152, 6144, 30000, 900.0), 5.0),
+            ((1024, 128, 500, 0.01), 3.0),
+        ] {
+            let (pixels, paths, rays, b) = pilot;
+            let lambda = allocation_scale(pixels, (paths, rays, b), s);
+            let bound = EDGE_COST * pixels as f64 * 2.0 * rays as f64 / paths as f64 / s;
+            assert!(lambda > 0.0 && lambda <= bound);
+            if lambda < bound * 0.999 {
+                let here = f(lambda, pilot, s);
+                assert!(here < f(0.8 * lambda, pilot, s) && here < f(1.25 * lambda, pilot, s));
+            }
+        }
+        let lambda = allocation_scale(1000, (100, 100, 0.0), 10.0);
+        assert!((lambda * 10.0 - EDGE_COST * 1000.0 * 2.0).abs() < 1e-6);
+        assert_eq!(allocation_scale(1000, (0, 0, 0.0), 10.0), 0.0);
+    }
+
     /// On the shipped Cornell box at 32×32 (its light in view), with each pixel's share of the
     /// light measured on a 16×16 grid of camera rays: every pixel the light's edge crosses well
     /// inside (a share of 0.1 to 0.9) is an edge pixel, and no edge pixel has a 3×3
@@ -233,7 +422,12 @@ mod tests {
             .iter()
             .map(|&(x, y)| UVec2::new(x, y))
             .collect();
-        let map = EdgeMap::new(&scene, &camera, image, &origins);
+        let alloc = Allocation {
+            seed: 1,
+            integrator: settings.integrator(),
+            most: MAX_EDGE_RAYS,
+        };
+        let map = EdgeMap::new(&scene, &camera, image, &origins, alloc);
         let (mut rays, mut stack) = (RayCounts::default(), TraceStack::default());
         let share: Vec<f32> = (0..32 * 32)
             .map(|i| {
@@ -252,7 +446,9 @@ mod tests {
         for y in 0..32i32 {
             for x in 0..32i32 {
                 let s = share[(y * 32 + x) as usize];
-                let flagged = map.at(UVec2::new(x as u32, y as u32));
+                let m = map.at(UVec2::new(x as u32, y as u32));
+                let flagged = m > 0;
+                assert!(m <= MAX_EDGE_RAYS);
                 if (0.1..=0.9).contains(&s) {
                     partial += 1;
                     assert!(
@@ -276,7 +472,11 @@ mod tests {
             partial >= 4,
             "the light's edge crosses only {partial} pixels"
         );
-        // each tile probes its 16×16 pixels and the ring inside the image: 17×17, four rays each
-        assert_eq!(map.rays.edge, 4 * 17 * 17 * 4);
+        // each tile probes its 16×16 pixels and the ring inside the image: 17×17, four rays
+        // each; the pilot 16 more in each edge pixel
+        assert_eq!(
+            map.rays.edge,
+            4 * 17 * 17 * 4 + PILOT_EDGE_RAYS as u64 * map.count
+        );
     }
 }

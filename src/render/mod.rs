@@ -400,7 +400,7 @@ pub fn render_passes_with<F: SamplerFactory>(
             kernel: Kernel::new(scene, &camera, settings, factory, guide, progress)
                 .with_rrs(rrs.as_ref().map(|r| r.kernel()))
                 .with_strip(plan.strip.as_deref())
-                .with_edges(edges, settings.edge_rays),
+                .with_edges(edges),
             settings,
             plan,
             start,
@@ -453,7 +453,12 @@ fn edge_map(
             (UVec2::new(w, h), tiles.collect())
         }
     };
-    Some(edges::EdgeMap::new(scene, camera, image, &origins))
+    let alloc = edges::Allocation {
+        seed: settings.seed,
+        integrator: settings.integrator(),
+        most: settings.edge_rays,
+    };
+    Some(edges::EdgeMap::new(scene, camera, image, &origins, alloc))
 }
 
 /// Whether a guided render of `settings` under `plan` that trains its own guide keeps its

@@ -123,7 +123,7 @@ pub(super) struct Kernel<'a, F: SamplerFactory> {
     /// The image's tiles the render's pixels show (`None`: the render is the image).
     strip: Option<&'a TileStrip>,
     /// The image's edge pixels and the edge rays a sample spends in each (`None`: none).
-    edges: Option<(&'a EdgeMap, u32)>,
+    edges: Option<&'a EdgeMap>,
 }
 
 /// What the tile kernel gives `--roulette ears`'s paths: the learned factors, each pixel's
@@ -177,10 +177,9 @@ impl<'a, F: SamplerFactory> Kernel<'a, F> {
         }
     }
 
-    /// The same kernel with edge rays: `m` a sample in each of `map`'s edge pixels (`None`, or
-    /// `m` = 0: none).
-    pub(super) fn with_edges(self, map: Option<&'a EdgeMap>, m: u32) -> Self {
-        let edges = map.filter(|_| m > 0).map(|e| (e, m));
+    /// The same kernel with edge rays: as many as `map` says in each of its edge pixels
+    /// (`None`: none).
+    pub(super) fn with_edges(self, edges: Option<&'a EdgeMap>) -> Self {
         Kernel { edges, ..self }
     }
 
@@ -189,9 +188,9 @@ impl<'a, F: SamplerFactory> Kernel<'a, F> {
     #[inline]
     fn edge_rays(&self, pixel: UVec2) -> (&IntegratorSettings, u32, UVec2) {
         let image = self.strip.map_or(pixel, |s| s.image_pixel(pixel));
-        match self.edges {
-            Some((map, m)) if map.at(image) => (&self.integrator_edge, m, image),
-            _ => (&self.integrator, 0, image),
+        match self.edges.map_or(0, |map| map.at(image)) {
+            0 => (&self.integrator, 0, image),
+            m => (&self.integrator_edge, m, image),
         }
     }
 

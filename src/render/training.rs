@@ -88,7 +88,7 @@ impl<'a, F: SamplerFactory> Trainer<'a, F> {
         )
         .with_seed(seed)
         .with_strip(self.plan.strip.as_deref())
-        .with_edges(self.edges, self.settings.edge_rays)
+        .with_edges(self.edges)
     }
 
     /// The training iterations of a guided render (see [`crate::guiding`]): iterations of 1,
