@@ -44,11 +44,11 @@
 //! and a path, the image's MSE times its time over `N` samples is `(Σ a_i/M_i + B)(C + c_e Σ M_i)`
 //! with `B = Σ b_j` and `C = P·c_p` over the `P` pixels, least at `M_i = λ√a_i`, `λ = √(C/(c_e B))`.
 //! A pilot after the probe estimates them, on fixed points no sample uses: `a_i` from
-//! [`PILOT_EDGE_RAYS`] edge rays in each edge pixel (at least the variance of the window's step
+//! 16 edge rays in each edge pixel (at least the variance of the window's step
 //! seen by one ray in 32: a pilot that saw one side only), `B` from two independent unguided
 //! paths in one pixel in 16 (`(x₁ − x₂)²/2`), `c_p/c_e` as twice a pilot path's rays. Where the
 //! paths hardly vary (`B` near 0: a scene that is all emission) `λ` is bounded so the edge rays
-//! cost at most [`EDGE_COST`] times the paths. The counts are fixed before any sample (and the
+//! cost at most 4 times the paths. The counts are fixed before any sample (and the
 //! same on any number of threads), so each pixel's estimator stays unbiased whatever it gets.
 //! The pilot costs about 1/8 of a sample a pixel and 16 rays an edge pixel.
 
