@@ -308,6 +308,9 @@ fn pilot(
                 let ray = camera.generate_ray(pixel, u);
                 *l = radiance(scene, ray, &mut sampler, settings, &mut counts, &mut stack);
                 path_rays += counts.total();
+                // its camera ray counted with the edge rays (what the edges cost, apart from
+                // the render's paths)
+                counts.edge += counts.camera;
                 rays.add(&counts);
             }
             let d = l[0] - l[1];
@@ -473,10 +476,9 @@ mod tests {
             "the light's edge crosses only {partial} pixels"
         );
         // each tile probes its 16×16 pixels and the ring inside the image: 17×17, four rays
-        // each; the pilot 16 more in each edge pixel
-        assert_eq!(
-            map.rays.edge,
-            4 * 17 * 17 * 4 + PILOT_EDGE_RAYS as u64 * map.count
-        );
+        // each; the pilot 16 more in each edge pixel, and two paths' camera rays in each of
+        // its (32/4)² pixels
+        let pilot = PILOT_EDGE_RAYS as u64 * map.count + 2 * 8 * 8;
+        assert_eq!(map.rays.edge, 4 * 17 * 17 * 4 + pilot);
     }
 }

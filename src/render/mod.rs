@@ -431,9 +431,8 @@ pub fn render_passes_with<F: SamplerFactory>(
     })?
 }
 
-/// The edge pixels of a render of `settings` under `plan` through `camera` (the image's:
-/// probed on the strip's tiles where it renders a strip), where it spends edge rays; `None`
-/// without them.
+/// The edge pixels of a render of `settings` under `plan` through `camera` (the image's, where
+/// it renders a strip), and the edge rays a sample spends in each; `None` without them.
 fn edge_map(
     scene: &Scene,
     camera: &Camera,
@@ -443,16 +442,15 @@ fn edge_map(
     if settings.edge_rays == 0 {
         return None;
     }
-    let (image, origins) = match &plan.strip {
-        Some(s) => (s.image, s.origins.clone()),
-        None => {
-            let (w, h) = (settings.width, settings.height);
-            let tiles = (0..h.div_ceil(TILE)).flat_map(|ty| {
-                (0..w.div_ceil(TILE)).map(move |tx| UVec2::new(tx * TILE, ty * TILE))
-            });
-            (UVec2::new(w, h), tiles.collect())
-        }
-    };
+    // a strip's map is the image's, probed over all of it: the allocation weighs each edge
+    // pixel against the whole image's paths, so a strip renders its tiles as the image does
+    let image = plan
+        .strip
+        .as_ref()
+        .map_or(UVec2::new(settings.width, settings.height), |s| s.image);
+    let origins: Vec<UVec2> = (0..image.y.div_ceil(TILE))
+        .flat_map(|ty| (0..image.x.div_ceil(TILE)).map(move |tx| UVec2::new(tx * TILE, ty * TILE)))
+        .collect();
     let alloc = edges::Allocation {
         seed: settings.seed,
         integrator: settings.integrator(),
