@@ -277,7 +277,7 @@ EFFICIENCY_CONFIGS = [("default", []), ("--replicates 4", ["--replicates", 4]),
                       ("--light-points area", ["--light-points", "area"]),
                       ("--light-points projected", ["--light-points", "projected"]),
                       ("--light-choice power", ["--light-choice", "power"]),
-                      ("--edge-rays 0", ["--edge-rays", 0]), ("--edge-rays 32", ["--edge-rays", 32])]
+                      ("--edge-rays 0", ["--edge-rays", 0]), ("--edge-rays 16", ["--edge-rays", 16])]
 
 
 def efficiency_ref(scene, w, h, spp=4096):
