@@ -180,9 +180,10 @@ impl EdgeMap {
 /// `λ` of the allocation `M_i = λ·√a_i` (see the module doc), from the `pixels` probed, the
 /// pilot's `paths` (their `rays`), the sum `b` of their pixels' variance estimates and the sum
 /// `s` of the edge pixels' `√a_i`: `√(C / (c_e·B))` with `C = P·c_p` the paths' cost a sample
-/// and `B ≈ b·P/(paths/2)` their variance (two paths a pilot pixel), but at most `C/(c_e·S)`,
-/// where the edge rays cost as much as the paths; a path costs `c_p/c_e = 2 × its rays` edge
-/// rays (a ray that shades and samples a light against one that only looks).
+/// and `B ≈ b·P/(paths/2)` their variance (two paths a pilot pixel), but at most
+/// `EDGE_COST·C/(c_e·S)`, where the edge rays cost [`EDGE_COST`] times the paths; a path costs
+/// `c_p/c_e = 2 × its rays` edge rays (a ray that shades and samples a light against one that
+/// only looks).
 fn allocation_scale(pixels: u64, (paths, rays, b): (u64, u64, f64), s: f64) -> f64 {
     if paths == 0 || s == 0.0 {
         return 0.0;
