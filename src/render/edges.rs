@@ -121,16 +121,14 @@ struct TileProbe {
 }
 
 impl EdgeMap {
-    /// The map of the `image`-sized image seen through `camera`, probed on the tiles whose
-    /// top-left pixels are `origins` (the rest of the image reads as no edge), with its edge
-    /// rays allocated by `alloc`.
-    pub(super) fn new(
-        scene: &Scene,
-        camera: &Camera,
-        image: UVec2,
-        origins: &[UVec2],
-        alloc: Allocation,
-    ) -> Self {
+    /// The map of the `image`-sized image seen through `camera`, probed over all its tiles,
+    /// with its edge rays allocated by `alloc` (a strip's map is the image's: the allocation
+    /// weighs each edge pixel against the whole image's paths, so a strip renders its tiles as
+    /// the image does).
+    pub(super) fn new(scene: &Scene, camera: &Camera, image: UVec2, alloc: Allocation) -> Self {
+        let origins: Vec<UVec2> = (0..image.y.div_ceil(TILE))
+            .flat_map(|ty| (0..image.x.div_ceil(TILE)).map(move |tx| UVec2::new(tx, ty) * TILE))
+            .collect();
         let tiles: Vec<(UVec2, TileProbe, RayCounts)> = origins
             .par_iter()
             .map(|&o| {
@@ -422,16 +420,12 @@ mod tests {
         };
         let camera = camera_for(&scene, &settings).unwrap();
         let image = UVec2::new(32, 32);
-        let origins: Vec<UVec2> = [(0, 0), (16, 0), (0, 16), (16, 16)]
-            .iter()
-            .map(|&(x, y)| UVec2::new(x, y))
-            .collect();
         let alloc = Allocation {
             seed: 1,
             integrator: settings.integrator(),
             most: MAX_EDGE_RAYS,
         };
-        let map = EdgeMap::new(&scene, &camera, image, &origins, alloc);
+        let map = EdgeMap::new(&scene, &camera, image, alloc);
         let (mut rays, mut stack) = (RayCounts::default(), TraceStack::default());
         let share: Vec<f32> = (0..32 * 32)
             .map(|i| {

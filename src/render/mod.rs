@@ -442,21 +442,16 @@ fn edge_map(
     if settings.edge_rays == 0 {
         return None;
     }
-    // a strip's map is the image's, probed over all of it: the allocation weighs each edge
-    // pixel against the whole image's paths, so a strip renders its tiles as the image does
     let image = plan
         .strip
         .as_ref()
         .map_or(UVec2::new(settings.width, settings.height), |s| s.image);
-    let origins: Vec<UVec2> = (0..image.y.div_ceil(TILE))
-        .flat_map(|ty| (0..image.x.div_ceil(TILE)).map(move |tx| UVec2::new(tx * TILE, ty * TILE)))
-        .collect();
     let alloc = edges::Allocation {
         seed: settings.seed,
         integrator: settings.integrator(),
         most: settings.edge_rays,
     };
-    Some(edges::EdgeMap::new(scene, camera, image, &origins, alloc))
+    Some(edges::EdgeMap::new(scene, camera, image, alloc))
 }
 
 /// Whether a guided render of `settings` under `plan` that trains its own guide keeps its
