@@ -102,8 +102,11 @@ impl<'a> Path<'a> {
         let g = (self.guide).and_then(|t| GuideAt::for_image(t, s.p, bsdf.diffuse_share()));
         let bin = direction_bin(wo);
         let n = rrs.factor(v.p, bin, whole, segment);
-        // n ≤ 1 + extra, so the count never passes what is left
-        let count = (n + first_u.roulette) as u32;
+        // n ≤ 1 + extra, so the count never passes what is left, but for the rounding of
+        // `n + u` in f32 (16 + 0.99999994 is 17.0): bounded, or `extra` wraps (a panic in a
+        // debug build, unbounded splitting in a release one; met by a test once the Cornell
+        // box's ties at shared edges were broken by a fixed rule)
+        let count = ((n + first_u.roulette) as u32).min(1 + rrs.extra);
         rrs.extra -= count.saturating_sub(1);
         rays.mark(Phase::Shade);
         let mut sum = Vec3::ZERO;
