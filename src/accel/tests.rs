@@ -185,3 +185,187 @@ fn the_build_keeps_each_triangle_once() {
         }
     }
 }
+
+/// A small scene's walk (`small.rs`: the blocks' boxes tested first or not) finds the tree's
+/// hit, bit for bit, on random triangles with duplicates (ties of `t`, facing the same way and
+/// the other way) and a filter: the tie rule makes the hit independent of the order the
+/// triangles are tested in, and the boxes' pad keeps a tied block from being skipped. Rays
+/// whose hit is closer than the tree's node epsilon are not compared (the module doc says why).
+#[test]
+#[cfg(target_arch = "x86_64")]
+fn a_small_scene_finds_the_trees_hit() {
+    if !has_avx2() {
+        return;
+    }
+    let mut tris = random_triangles(77, 80, 0.8);
+    let copies: Vec<[Vec3; 3]> = tris.iter().step_by(4).copied().collect();
+    tris.extend(copies.iter().step_by(2));
+    tris.extend(copies.iter().skip(1).step_by(2).map(|t| [t[0], t[2], t[1]]));
+    let accel = Accel::build(&tris);
+    assert!(accel.bvh.nodes.len() > 1);
+    let boxes = accel.small.clone().expect("a small scene");
+    let mut rng = SmallRng::seed_from_u64(5);
+    let mut stack = TraceStack::default();
+    let (mut hits, mut near) = (0, 0);
+    for i in 0..20_000 {
+        let o = Vec3::new(rng.random(), rng.random(), rng.random()) * 6.0 - 3.0;
+        let t = tris[rng.random_range(0..tris.len())];
+        let target = t[0] + (t[1] - t[0]) * rng.random::<f32>() * 0.5 + (t[2] - t[0]) * 0.4;
+        let d = (target - o).normalize_or(Vec3::X);
+        let tmax = if i % 4 == 0 { 2.0 } else { f32::INFINITY };
+        let keep_all = |_: u32, _: Vec2| true;
+        let keep_some = |prim: u32, b: Vec2| !prim.is_multiple_of(3) && b.x < 0.8;
+        for keep in [&keep_all as &dyn Fn(u32, Vec2) -> bool, &keep_some] {
+            // SAFETY: the CPU has AVX2 (checked above)
+            #[allow(unsafe_code)]
+            let (tree, tree_any) = unsafe {
+                (
+                    accel.closest_avx2(&mut stack.0, o, d, tmax, keep),
+                    accel.any_avx2(&mut stack.0, o, d, tmax, keep),
+                )
+            };
+            for culls in [false, true] {
+                let boxes = BlockBoxes {
+                    culls,
+                    ..boxes.clone()
+                };
+                // SAFETY: the CPU has AVX2 (checked above)
+                #[allow(unsafe_code)]
+                let (small, small_any) = unsafe {
+                    (
+                        accel.closest_small_avx2(&boxes, (o, d, tmax), keep),
+                        small_any_avx2(&accel, &boxes, &ray_of(o, d, tmax), &keep),
+                    )
+                };
+                if small.is_some_and(|h| h.t < 1e-3) {
+                    near += 1;
+                    continue;
+                }
+                let bits = |h: Option<Hit>| {
+                    h.map(|h| (h.prim, h.t.to_bits(), h.b1.to_bits(), h.b2.to_bits()))
+                };
+                assert_eq!(bits(small), bits(tree), "ray {i}, culls {culls}");
+                assert_eq!(small_any, tree_any, "ray {i}, culls {culls}");
+                hits += small.is_some() as u32;
+            }
+        }
+    }
+    assert!(near < 40, "{near}");
+    assert!(hits > 30_000 && hits < 80_000, "{hits}");
+}
+
+/// Two coincident faces of a zero-thickness wall, facing opposite ways: a ray from either side
+/// hits the face that faces it, whichever walk runs (the tree's, AVX2 and SSE; every block's;
+/// the brute-force reference), and whichever of the two comes first in the triangle list.
+#[test]
+fn a_two_faced_wall_shows_each_side_its_own_face() {
+    let up = [
+        Vec3::new(-1.0, -1.0, 0.0),
+        Vec3::new(1.0, -1.0, 0.0),
+        Vec3::new(0.0, 1.0, 0.0),
+    ];
+    let down = [up[0], up[2], up[1]];
+    // far-away clutter: with it the tree is walked, without it every block is tested
+    let clutter: Vec<[Vec3; 3]> = random_triangles(3, 100, 0.2)
+        .into_iter()
+        .map(|t| t.map(|p| p + Vec3::new(10.0, 0.0, 0.0)))
+        .collect();
+    for pair in [[up, down], [down, up]] {
+        for extra in [&clutter[..0], &clutter[..]] {
+            let mut tris = pair.to_vec();
+            tris.extend_from_slice(extra);
+            let accel = Accel::build(&tris);
+            for (o, d, facing) in [(Vec3::Z, -Vec3::Z, up), (-Vec3::Z, Vec3::Z, down)] {
+                for x in [-0.3f32, 0.0, 0.2] {
+                    let o = o + Vec3::new(x, 0.1 * x, 0.0);
+                    let mut stack = TraceStack::default();
+                    let mut found = vec![
+                        accel.intersect_with(&mut stack, o, d, f32::INFINITY),
+                        accel.intersect_brute_force(o, d, f32::INFINITY),
+                        accel.closest_sse(&mut stack.0, o, d, f32::INFINITY, |_, _| true),
+                    ];
+                    #[cfg(target_arch = "x86_64")]
+                    if has_avx2() {
+                        // SAFETY: the CPU has AVX2
+                        #[allow(unsafe_code)]
+                        found.push(unsafe {
+                            accel.closest_avx2(&mut stack.0, o, d, f32::INFINITY, |_, _| true)
+                        });
+                    }
+                    for hit in found {
+                        let hit = hit.expect("the wall is hit");
+                        let v = accel.vertices(hit.prim);
+                        let input = tris[accel.order[hit.prim as usize] as usize];
+                        assert_eq!(input, facing, "from {o} along {d}: {v:?}");
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Flat blocks (a tiled wall in the plane `z = 0.3`, each tile also as a face turned the other
+/// way) with the blocks' boxes tested first: a ray meets a flat box at the `t` it meets its
+/// triangles, up to rounding, and the boxes' pad makes it enter the box no later than any of
+/// its triangles' hits (without the pad this fails within the first 30 rays), so the walk
+/// finds the brute-force hit, the face turned toward the ray, from either side.
+#[test]
+#[cfg(target_arch = "x86_64")]
+fn flat_blocks_keep_their_ties() {
+    if !has_avx2() {
+        return;
+    }
+    let mut tris = Vec::new();
+    for i in 0..6 {
+        for j in 0..4 {
+            let (x, y) = (i as f32 * 0.7 - 2.0, j as f32 * 0.9 - 1.7);
+            let t = [
+                Vec3::new(x, y, 0.3),
+                Vec3::new(x + 0.7, y, 0.3),
+                Vec3::new(x, y + 0.9, 0.3),
+            ];
+            tris.push(t);
+            tris.push([t[0], t[2], t[1]]);
+        }
+    }
+    let accel = Accel::build(&tris);
+    let boxes = BlockBoxes {
+        culls: true,
+        ..accel.small.clone().expect("a small scene")
+    };
+    let mut rng = SmallRng::seed_from_u64(8);
+    let (mut hits, mut entries) = (0, 0);
+    for i in 0..20_000 {
+        let side = if i % 2 == 0 { 1.0 } else { -1.0 };
+        let o = Vec3::new(rng.random(), rng.random(), 0.0) * 4.0 - Vec3::new(2.0, 2.0, -0.3)
+            + Vec3::Z * side * (0.1 + 2.0 * rng.random::<f32>());
+        let target = Vec3::new(rng.random(), rng.random(), 0.0) * 4.0 - Vec3::new(2.0, 2.0, -0.3);
+        let d = (target - o).normalize();
+        // SAFETY: the CPU has AVX2 (checked above)
+        #[allow(unsafe_code)]
+        let small = unsafe { accel.closest_small_avx2(&boxes, (o, d, f32::INFINITY), |_, _| true) };
+        let brute = accel.intersect_brute_force(o, d, f32::INFINITY);
+        assert_eq!(small, brute, "ray {i}");
+        // every triangle the ray hits lies in a box it enters, and enters no later
+        let ray = ray_of(o, d, f32::INFINITY);
+        // SAFETY: the CPU has AVX2 (checked above)
+        #[allow(unsafe_code)]
+        let (entered, entry) = unsafe { boxes.entered_avx2(&ray) };
+        for prim in 0..accel.len() as u32 {
+            if let Some((t, _, _)) = hit_triangle(&accel.tri(prim), &ray) {
+                let block = prim as usize / 8;
+                assert!(entered & (1 << block) != 0 && entry[block] <= t, "ray {i}");
+                entries += 1;
+            }
+        }
+        if let Some(h) = small {
+            let v = tris[accel.order[h.prim as usize] as usize];
+            let facing = (v[1] - v[0]).cross(v[2] - v[0]).dot(d) < 0.0;
+            assert!(facing, "ray {i} hit the face turned away");
+            hits += 1;
+        }
+    }
+    // a triangle covers half its tile and the tiles about 0.9 of the targets: ~45% hit
+    assert!(hits > 7_000, "{hits}");
+    assert!(entries >= 2 * hits, "{entries}");
+}

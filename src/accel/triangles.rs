@@ -27,6 +27,27 @@ pub(super) fn hit_triangle(tri: &Tri, ray: &Ray) -> Option<(f32, Vec2, f32)> {
     None
 }
 
+/// Whether a hit `(t, det, prim)` replaces the closest so far (`best`, at `tmax`): it is
+/// nearer, or as near and a better choice between coincident triangles: the one that faces the
+/// ray (counter-clockwise seen from the ray's origin, as OBJ's front faces are; obvhs's
+/// `ng = e1 × e2` is the opposite of that face's normal, so `det = ng·d > 0`) over one that faces away, else the lower index. So two faces of a
+/// zero-thickness wall, each facing its own side, are each seen from their side, and the hit is
+/// the same whichever order a traversal tests the tied triangles in (the tree's order by the
+/// ray's octant, or a small scene's blocks in their order: `small.rs`).
+#[inline(always)]
+pub(super) fn closer(
+    (t, det, prim): (f32, f32, u32),
+    tmax: f32,
+    best: &Option<(u32, Vec2, f32)>,
+) -> bool {
+    t < tmax
+        || (t == tmax
+            && best.is_some_and(|(id, _, best_det)| {
+                let (front, best_front) = (det > 0.0, best_det > 0.0);
+                (front && !best_front) || (front == best_front && prim < id)
+            }))
+}
+
 /// One triangle as the test reads it (obvhs's `RtTriangle` fields).
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Tri {
@@ -62,6 +83,14 @@ impl TriBlock {
         }
     }
 
+    /// The corners of the box of lane `i`'s triangle (its vertices `v0`, `v0 − e1`, `v0 + e2`
+    /// as rounded from the rows: within an ulp or two of the input's).
+    pub(super) fn bounds(&self, i: usize) -> (Vec3A, Vec3A) {
+        let t = self.get(i);
+        let (v1, v2) = (t.v0 - t.e1, t.v0 + t.e2);
+        (t.v0.min(v1).min(v2), t.v0.max(v1).max(v2))
+    }
+
     /// Put `t` in lane `i`.
     pub(super) fn set(&mut self, i: usize, t: &RtTriangle) {
         for (k, v) in [t.v0, t.e1, t.e2, t.ng].into_iter().enumerate() {
@@ -89,7 +118,7 @@ pub(super) fn group_closest(
         bits &= !(1 << k);
         let id = base + k;
         if let Some((t, n, det)) = hit_triangle(&acc.tri(id), ray) {
-            if t < ray.tmax && keep(id, n / det) {
+            if closer((t, det, id), ray.tmax, best) && keep(id, n / det) {
                 ray.tmax = t;
                 *best = Some((id, n, det));
             }
@@ -126,7 +155,39 @@ pub(super) fn group_any(
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[inline]
-fn block_hits_avx2(b: &TriBlock, ray: &Ray) -> (u32, [[f32; 8]; 4]) {
+pub(super) fn block_hits_avx2(b: &TriBlock, ray: &Ray) -> (u32, [[f32; 8]; 4]) {
+    use std::arch::x86_64::*;
+    let (hits, t, nu, nv, det) = block_test_avx2(b, ray);
+    let hits = _mm256_movemask_ps(hits) as u32;
+    let mut out = [[0.0f32; 8]; 4];
+    if hits != 0 {
+        for (o, v) in out.iter_mut().zip([t, nu, nv, det]) {
+            // SAFETY: `o` is 8 f32s, what an unaligned store writes
+            #[allow(unsafe_code)]
+            unsafe {
+                _mm256_storeu_ps(o.as_mut_ptr(), v)
+            };
+        }
+    }
+    (hits, out)
+}
+
+/// [`block_hits_avx2`] in vectors: the lanes hit (all bits set), `t`, the barycentric
+/// numerators and the denominator.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+#[allow(clippy::type_complexity)]
+fn block_test_avx2(
+    b: &TriBlock,
+    ray: &Ray,
+) -> (
+    std::arch::x86_64::__m256,
+    std::arch::x86_64::__m256,
+    std::arch::x86_64::__m256,
+    std::arch::x86_64::__m256,
+    std::arch::x86_64::__m256,
+) {
     use std::arch::x86_64::*;
     // SAFETY: a row is 8 f32s at a 32-byte boundary (TriBlock is align(32))
     #[allow(unsafe_code)]
@@ -154,24 +215,23 @@ fn block_hits_avx2(b: &TriBlock, ray: &Ray) -> (u32, [[f32; 8]; 4]) {
     let nv = dot(rx, ry, rz, row(3), row(4), row(5));
     let (u, v) = (mul(nu, inv), mul(nv, inv));
     let w = sub(sub(_mm256_set1_ps(1.0), u), v);
-    let negative = _mm256_movemask_ps(_mm256_or_ps(_mm256_or_ps(u, v), w)) as u32;
+    // a lane is negative where the sign bit of u, v or w is set
+    let negative = _mm256_castsi256_ps(_mm256_srai_epi32::<31>(_mm256_castps_si256(_mm256_or_ps(
+        _mm256_or_ps(u, v),
+        w,
+    ))));
     let t = mul(dot(ngx, ngy, ngz, cx, cy, cz), inv);
-    let mask = |m: __m256| _mm256_movemask_ps(m) as u32;
-    let hits = mask(_mm256_cmp_ps::<_CMP_NEQ_UQ>(inv, _mm256_setzero_ps()))
-        & !negative
-        & mask(_mm256_cmp_ps::<_CMP_GE_OQ>(t, _mm256_set1_ps(ray.tmin)))
-        & mask(_mm256_cmp_ps::<_CMP_LE_OQ>(t, _mm256_set1_ps(ray.tmax)));
-    let mut out = [[0.0f32; 8]; 4];
-    if hits != 0 {
-        for (o, v) in out.iter_mut().zip([t, nu, nv, det]) {
-            // SAFETY: `o` is 8 f32s, what an unaligned store writes
-            #[allow(unsafe_code)]
-            unsafe {
-                _mm256_storeu_ps(o.as_mut_ptr(), v)
-            };
-        }
-    }
-    (hits, out)
+    let hits = _mm256_andnot_ps(
+        negative,
+        _mm256_and_ps(
+            _mm256_cmp_ps::<_CMP_NEQ_UQ>(inv, _mm256_setzero_ps()),
+            _mm256_and_ps(
+                _mm256_cmp_ps::<_CMP_GE_OQ>(t, _mm256_set1_ps(ray.tmin)),
+                _mm256_cmp_ps::<_CMP_LE_OQ>(t, _mm256_set1_ps(ray.tmax)),
+            ),
+        ),
+    );
+    (hits, t, nu, nv, det)
 }
 
 /// The blocks a group touches, from the highest: `(block, lanes)` for each block of the
@@ -209,7 +269,7 @@ pub(super) fn group_closest_avx2(
             hits &= !(1 << i);
             let id = (block * 8 + i) as u32;
             let n = Vec2::new(nu[i], nv[i]);
-            if t[i] < ray.tmax && keep(id, n / det[i]) {
+            if closer((t[i], det[i], id), ray.tmax, best) && keep(id, n / det[i]) {
                 ray.tmax = t[i];
                 *best = Some((id, n, det[i]));
             }
