@@ -148,17 +148,23 @@ macro_rules! closest_walk {
             let (base, bits) = take_group!(state);
             $group($acc, base, bits, &mut ray, &mut best, &$keep);
         });
-        best.map(|(prim, n, det)| {
-            // compute_barycentric's division, on the numerators of the test
-            let b = n / det;
-            Hit {
-                t: ray.tmax,
-                prim,
-                b1: b.x,
-                b2: b.y,
-            }
-        })
+        hit_of(best, ray.tmax)
     }};
+}
+
+/// The [`Hit`] at `t` of a walk's closest hit (primitive, barycentric numerators, denominator):
+/// obvhs's `compute_barycentric` division, on the numerators of the test.
+#[inline(always)]
+fn hit_of(best: Option<(u32, Vec2, f32)>, t: f32) -> Option<Hit> {
+    best.map(|(prim, n, det)| {
+        let b = n / det;
+        Hit {
+            t,
+            prim,
+            b1: b.x,
+            b2: b.y,
+        }
+    })
 }
 
 /// The any-hit walk (stops at the first kept hit), as [`closest_walk`].
@@ -464,15 +470,7 @@ impl Accel {
         let mut ray = ray_of(origin, dir, tmax);
         let mut best = None;
         small_closest_avx2(self, boxes, &mut ray, &mut best, &keep);
-        best.map(|(prim, n, det)| {
-            let b = n / det;
-            Hit {
-                t: ray.tmax,
-                prim,
-                b1: b.x,
-                b2: b.y,
-            }
-        })
+        hit_of(best, ray.tmax)
     }
 
     /// The any-hit walk with AVX2 node tests, compiled for AVX2.
@@ -546,14 +544,6 @@ impl Accel {
                 }
             }
         }
-        best.map(|(prim, n, det): (u32, Vec2, f32)| {
-            let b = n / det;
-            Hit {
-                t: best_t,
-                prim,
-                b1: b.x,
-                b2: b.y,
-            }
-        })
+        hit_of(best, best_t)
     }
 }

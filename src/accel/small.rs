@@ -12,7 +12,9 @@
 //! closest so far (a tie: [`super::triangles::closer`]) is tested, and the walk finds the
 //! tree's hit.
 
-use super::triangles::{block_hits_avx2, closer, TriBlock};
+use super::triangles::TriBlock;
+#[cfg(target_arch = "x86_64")]
+use super::triangles::{block_any_avx2, block_closest_avx2};
 use super::Accel;
 use glam::{Vec2, Vec3A};
 use obvhs::ray::Ray;
@@ -158,19 +160,8 @@ pub(super) fn small_closest_avx2(
     while blocks != 0 {
         let block = blocks.trailing_zeros() as usize;
         blocks &= blocks - 1;
-        if entry[block] > ray.tmax {
-            continue;
-        }
-        let (mut hits, [t, nu, nv, det]) = block_hits_avx2(&acc.blocks[block], ray);
-        while hits != 0 {
-            let i = hits.trailing_zeros() as usize;
-            hits &= hits - 1;
-            let id = (block * 8 + i) as u32;
-            let n = Vec2::new(nu[i], nv[i]);
-            if closer((t[i], det[i], id), ray.tmax, best) && keep(id, n / det[i]) {
-                ray.tmax = t[i];
-                *best = Some((id, n, det[i]));
-            }
+        if entry[block] <= ray.tmax {
+            block_closest_avx2(acc, (block, 0xff), ray, best, keep);
         }
     }
 }
@@ -193,13 +184,8 @@ pub(super) fn small_any_avx2(
     while blocks != 0 {
         let block = blocks.trailing_zeros() as usize;
         blocks &= blocks - 1;
-        let (mut hits, [_, nu, nv, det]) = block_hits_avx2(&acc.blocks[block], ray);
-        while hits != 0 {
-            let i = hits.trailing_zeros() as usize;
-            hits &= hits - 1;
-            if keep((block * 8 + i) as u32, Vec2::new(nu[i], nv[i]) / det[i]) {
-                return true;
-            }
+        if block_any_avx2(acc, (block, 0xff), ray, keep) {
+            return true;
         }
     }
     false

@@ -155,7 +155,7 @@ pub(super) fn group_any(
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[inline]
-pub(super) fn block_hits_avx2(b: &TriBlock, ray: &Ray) -> (u32, [[f32; 8]; 4]) {
+fn block_hits_avx2(b: &TriBlock, ray: &Ray) -> (u32, [[f32; 8]; 4]) {
     use std::arch::x86_64::*;
     let (hits, t, nu, nv, det) = block_test_avx2(b, ray);
     let hits = _mm256_movemask_ps(hits) as u32;
@@ -247,9 +247,9 @@ fn group_blocks(base: u32, bits: u32) -> impl Iterator<Item = (usize, u32)> {
         .filter(|&(_, lanes)| lanes != 0)
 }
 
-/// [`group_closest`] with a block's 8 triangles tested at once ([`block_hits_avx2`]); the hits
-/// are then taken in the scalar order (the highest index first, strictly closer replaces), so
-/// the result is the scalar one's bits, `keep` included.
+/// [`group_closest`] with a block's 8 triangles tested at once ([`block_closest_avx2`]): the
+/// hits taken in another order than the scalar walk's, but the rule of [`closer`] orders every
+/// hit, so the result is the scalar one's bits, `keep` included.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[inline]
@@ -262,17 +262,33 @@ pub(super) fn group_closest_avx2(
     keep: &impl Fn(u32, Vec2) -> bool,
 ) {
     for (block, lanes) in group_blocks(base, bits) {
-        let (hits, [t, nu, nv, det]) = block_hits_avx2(&acc.blocks[block], ray);
-        let mut hits = hits & lanes;
-        while hits != 0 {
-            let i = (31 - hits.leading_zeros()) as usize;
-            hits &= !(1 << i);
-            let id = (block * 8 + i) as u32;
-            let n = Vec2::new(nu[i], nv[i]);
-            if closer((t[i], det[i], id), ray.tmax, best) && keep(id, n / det[i]) {
-                ray.tmax = t[i];
-                *best = Some((id, n, det[i]));
-            }
+        block_closest_avx2(acc, (block, lanes), ray, best, keep);
+    }
+}
+
+/// The hits of block `block`'s triangles in `lanes` (a bit a lane), tested at once
+/// ([`block_hits_avx2`]), taken into the closest kept hit `best`: one that [`closer`] prefers
+/// and `keep` accepts shortens the ray and becomes `best`.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+pub(super) fn block_closest_avx2(
+    acc: &Accel,
+    (block, lanes): (usize, u32),
+    ray: &mut Ray,
+    best: &mut Option<(u32, Vec2, f32)>,
+    keep: &impl Fn(u32, Vec2) -> bool,
+) {
+    let (hits, [t, nu, nv, det]) = block_hits_avx2(&acc.blocks[block], ray);
+    let mut hits = hits & lanes;
+    while hits != 0 {
+        let i = hits.trailing_zeros() as usize;
+        hits &= hits - 1;
+        let id = (block * 8 + i) as u32;
+        let n = Vec2::new(nu[i], nv[i]);
+        if closer((t[i], det[i], id), ray.tmax, best) && keep(id, n / det[i]) {
+            ray.tmax = t[i];
+            *best = Some((id, n, det[i]));
         }
     }
 }
@@ -288,15 +304,26 @@ pub(super) fn group_any_avx2(
     ray: &Ray,
     keep: &impl Fn(u32, Vec2) -> bool,
 ) -> bool {
-    for (block, lanes) in group_blocks(base, bits) {
-        let (hits, [_, nu, nv, det]) = block_hits_avx2(&acc.blocks[block], ray);
-        let mut hits = hits & lanes;
-        while hits != 0 {
-            let i = hits.trailing_zeros() as usize;
-            hits &= hits - 1;
-            if keep((block * 8 + i) as u32, Vec2::new(nu[i], nv[i]) / det[i]) {
-                return true;
-            }
+    group_blocks(base, bits).any(|b| block_any_avx2(acc, b, ray, keep))
+}
+
+/// Whether a triangle of block `block` in `lanes` blocks `ray` and `keep` accepts it.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+pub(super) fn block_any_avx2(
+    acc: &Accel,
+    (block, lanes): (usize, u32),
+    ray: &Ray,
+    keep: &impl Fn(u32, Vec2) -> bool,
+) -> bool {
+    let (hits, [_, nu, nv, det]) = block_hits_avx2(&acc.blocks[block], ray);
+    let mut hits = hits & lanes;
+    while hits != 0 {
+        let i = hits.trailing_zeros() as usize;
+        hits &= hits - 1;
+        if keep((block * 8 + i) as u32, Vec2::new(nu[i], nv[i]) / det[i]) {
+            return true;
         }
     }
     false
