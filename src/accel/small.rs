@@ -42,6 +42,12 @@ pub(super) const SMALL_BLOCKS: usize = 16;
 /// walls around it.)
 const BOX_TEST_COST: f32 = 3.0;
 
+/// The empty box, and the union of two boxes `(lo, hi)`.
+const EMPTY: (Vec3A, Vec3A) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
+fn union((a, b): (Vec3A, Vec3A), (lo, hi): (Vec3A, Vec3A)) -> (Vec3A, Vec3A) {
+    (a.min(lo), b.max(hi))
+}
+
 /// The boxes of a small scene's blocks, each axis's lower and upper planes a row of 16 lanes
 /// (one lane a block; the second 8 tested only where there are more than 8 blocks), padded
 /// (see the module doc); `lanes` has a bit for each block.
@@ -72,10 +78,7 @@ impl BlockBoxes {
             .map(|k| {
                 (8 * k..count.min(8 * k + 8))
                     .map(|i| blocks[k].bounds(i % 8))
-                    .fold(
-                        (Vec3A::INFINITY, Vec3A::NEG_INFINITY),
-                        |(a, b), (lo, hi)| (a.min(lo), b.max(hi)),
-                    )
+                    .fold(EMPTY, union)
             })
             .collect();
         let largest = bounds
@@ -87,10 +90,7 @@ impl BlockBoxes {
             let e = (*hi - *lo).max(Vec3A::ZERO);
             e.x * e.y + e.y * e.z + e.z * e.x
         };
-        let all = bounds.iter().fold(
-            (Vec3A::INFINITY, Vec3A::NEG_INFINITY),
-            |(a, b), (lo, hi)| (a.min(*lo), b.max(*hi)),
-        );
+        let all = bounds.iter().copied().fold(EMPTY, union);
         let entered: f32 = bounds
             .iter()
             .map(|b| area(b) / area(&all).max(f32::MIN_POSITIVE))
