@@ -44,6 +44,7 @@ def test_the_readme_line_renders_the_cornell_box_at_its_size():
         (["--roulette", "ears"], dict(roulette="ears")),
         (["--directions", "guided"], dict(directions="guided")),
         (["--directions", "guided", "--training-images", "discard"], dict(directions="guided", training_images="discard")),
+        (["--directions", "guided", "--guide-gate", "off"], dict(directions="guided", guide_gate="off")),
     ],
 )
 def test_arrays_and_metadata_match_the_cli_exr_bit_for_bit(tmp_path, flags, kwargs):

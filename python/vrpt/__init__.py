@@ -263,6 +263,7 @@ def render(
     roulette: Optional[str] = None,
     edge_rays: Optional[int] = None,
     training_images: Optional[str] = None,
+    guide_gate: Optional[str] = None,
     threads: Optional[int] = None,
     strict: bool = False,
     stats: bool = False,
@@ -282,7 +283,9 @@ def render(
     ``edge_rays`` is the most camera rays a sample spends on the emission seen directly in a
     pixel along the edge of a light, each pixel's count chosen by a pilot (default 256; 0: off).
     ``training_images`` (guided directions only) is ``keep`` (the default: the last training
-    iterations are combined into the image by inverse variance) or ``discard``.
+    iterations are combined into the image by inverse variance) or ``discard``; ``guide_gate``
+    (guided directions only) is ``on`` (the default: probes during training render the rest
+    without the guide where it loses) or ``off``.
     ``sampler`` may also be a function of your own (see ``SamplerFunction``): slow, since Python
     draws every number, but rendered through the same entry as vrpt's samplers. ``shard`` is
     ``(i, n)``. The image is kept in memory; ``Render.save`` writes it.
@@ -313,6 +316,7 @@ def render(
         roulette=roulette,
         edge_rays=edge_rays,
         training_images=training_images,
+        guide_gate=guide_gate,
         threads=threads,
         strict=strict,
         stats=stats,

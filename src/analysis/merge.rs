@@ -294,6 +294,7 @@ fn merged_metadata(inputs: &[MergeInput], merged: &MergedPixels) -> RenderMetada
         time_limit_seconds: None,
         image: None,
         auto: None,
+        guide_gate: None,
         shard: None,
         requested_spp: None,
         interrupted: inputs.iter().any(|i| i.meta.interrupted),

@@ -96,6 +96,12 @@ pub struct RenderRequest {
     /// does --reuse K > 1, whose final samples outweigh the unreused training's) [default: keep]
     #[arg(long, value_name = "WHAT", value_parser = ["keep", "discard"])]
     pub training_images: Option<String>,
+    /// With --directions guided and its training images kept: `on` probes the guide against
+    /// Phong directions during its training (up to three iterations, from the first of 2^17
+    /// paths) and renders the rest without it where it loses beyond the noise twice in a row
+    /// (the glossy plates), `off` guides whatever the probes would read [default: on]
+    #[arg(long, value_name = "ON/OFF", value_parser = ["on", "off"])]
+    pub guide_gate: Option<String>,
     /// With --roulette ears: also write the learned factor at each pixel's first vertex (over
     /// 1: the paths split there; under 1: they end more often) as a false-colour PNG.
     #[arg(long, value_name = "PNG")]
@@ -416,6 +422,15 @@ impl RenderRequest {
                     .into(),
             ));
         }
+        if self.guide_gate.is_some()
+            && (auto || settings.strategy.directions != crate::bsdf::Directions::Guided)
+        {
+            return Err(Error::Settings(
+                "--guide-gate: only a guided render (--directions guided) trains a guide to \
+                 gate"
+                    .into(),
+            ));
+        }
         if self.training_images.as_deref() == Some("keep") && settings.reuse > 1 {
             return Err(Error::Settings(format!(
                 "--training-images keep: a render that reuses paths (--reuse {}) keeps the final \
@@ -438,6 +453,7 @@ impl RenderRequest {
             strip: None,
             guide: None,
             discard_training: self.training_images.as_deref() == Some("discard"),
+            ungated: self.guide_gate.as_deref() == Some("off"),
         })
     }
 }

@@ -432,6 +432,11 @@ pub const KEYS: &[Key] = &[
         },
     },
     Key {
+        name: "guide_gate",
+        write: |m| m.guide_gate.clone(),
+        read: |m, v| set(&mut m.guide_gate, v.text.map(String::from)),
+    },
+    Key {
         // the estimate's record: this key makes it, and the three after it complete it
         name: "replicates",
         write: |m| m.estimate.as_ref().map(|e| e.replicates.to_string()),

@@ -65,6 +65,9 @@ pub struct RenderMetadata {
     pub image: Option<String>,
     /// `--strategy auto`'s choice and what its pilots measured ([`crate::render::auto::Choice::record`]).
     pub auto: Option<String>,
+    /// A guided render's gate: what its probes read and its verdict
+    /// ([`crate::render::gate::Gate::record`]).
+    pub guide_gate: Option<String>,
     /// `(i, n)`: the render is shard `i` of `n` (`vrpt render --shard i/n`).
     pub shard: Option<(u32, u32)>,
     /// The spp asked for, when the render stopped before it (a time limit or a signal).
@@ -196,6 +199,7 @@ impl RenderMetadata {
             merged_from: None,
             image: None,
             auto: None,
+            guide_gate: stats.guide.and_then(|g| g.gate).map(|g| g.record()),
             shard: None,
             requested_spp: None,
             interrupted: false,
@@ -294,6 +298,7 @@ impl RenderMetadata {
             merged_from: None,
             image: None,
             auto: None,
+            guide_gate: None,
             shard: None,
             requested_spp: None,
             interrupted: false,

@@ -99,6 +99,9 @@ mod tests {
             merged_from: None,
             image: None,
             auto: Some("chose mis; efficiency mis 1.000, stratified+guided+mis 0.83".into()),
+            guide_gate: Some(
+                "closed at 8 spp: Phong directions 1.79x as efficient as the guide, z 4.2".into(),
+            ),
             shard: Some((2, 4)),
             requested_spp: Some(128),
             interrupted: true,

@@ -67,24 +67,36 @@ impl IterationImage {
     }
 }
 
-/// The training iterations kept so far, the oldest dropped past [`KEPT_ITERATIONS`].
+/// The training iterations kept so far, the oldest dropped past [`KEPT_ITERATIONS`], and the
+/// gate's probes ([`super::gate`]: at most [`super::gate::GATE_PROBES`], all kept).
 #[derive(Debug, Default)]
 pub(super) struct KeptIterations {
     images: VecDeque<IterationImage>,
+    probes: Vec<IterationImage>,
 }
 
 impl KeptIterations {
-    /// Keep the iteration `film` holds.
-    pub(super) fn push(&mut self, film: &Film) {
+    /// Keep an iteration's image.
+    pub(super) fn push(&mut self, image: IterationImage) {
         if self.images.len() == KEPT_ITERATIONS {
             self.images.pop_front();
         }
-        self.images.push_back(IterationImage::of(film));
+        self.images.push_back(image);
     }
 
-    /// The kept iterations, oldest first.
+    /// Keep a probe of the gate.
+    pub(super) fn push_probe(&mut self, probe: IterationImage) {
+        self.probes.push(probe);
+    }
+
+    /// The kept iterations, oldest first, then the probes.
     pub(super) fn images(&self) -> impl Iterator<Item = &IterationImage> {
-        self.images.iter()
+        self.images.iter().chain(&self.probes)
+    }
+
+    /// How many of [`Self::images`] are probes.
+    pub(super) fn probes(&self) -> u32 {
+        self.probes.len() as u32
     }
 }
 
@@ -93,8 +105,11 @@ impl KeptIterations {
 /// (averaged over the image's pixels).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Combination {
-    /// Training iterations combined with the final one.
+    /// Training images combined with the final iteration: training iterations and the gate's
+    /// probes ([`super::gate`]).
     pub iterations: u32,
+    /// Of them, the gate's probes.
+    pub probes: u32,
     /// The final iteration's weight `w_final`, the mean over pixels.
     pub final_weight: f64,
 }
@@ -115,6 +130,7 @@ pub(super) fn combine(film: &mut Film, kept: &[&IterationImage]) -> Combination 
     if kept.is_empty() {
         return Combination {
             iterations: 0,
+            probes: 0,
             final_weight: 1.0,
         };
     }
@@ -122,20 +138,7 @@ pub(super) fn combine(film: &mut Film, kept: &[&IterationImage]) -> Combination 
     let groups: Vec<&IterationImage> = kept.iter().copied().chain([&last]).collect();
     let (n_pixels, width) = (film.len(), film.width);
     // F(p): every group's samples of the pixel pooled
-    let pooled: Vec<DVec3> = (0..n_pixels)
-        .map(|i| {
-            let (mut s, mut n) = (DVec3::ZERO, 0.0);
-            for g in &groups {
-                s += g.mean[i].as_dvec3() * g.count[i] as f64;
-                n += g.count[i] as f64;
-            }
-            if n > 0.0 {
-                s / n
-            } else {
-                DVec3::ZERO
-            }
-        })
-        .collect();
+    let pooled = pooled(&groups);
     // per group and class: Σ v/(F² + ε) over pixels and channels, the terms, and the samples
     let mut rel = vec![[0.0f64; 2]; groups.len()];
     let mut terms = vec![[0u64; 2]; groups.len()];
@@ -177,8 +180,63 @@ pub(super) fn combine(film: &mut Film, kept: &[&IterationImage]) -> Combination 
     }
     Combination {
         iterations: kept.len() as u32,
+        probes: 0,
         final_weight: final_weight / n_pixels.max(1) as f64,
     }
+}
+
+/// Each pixel's mean over every image's samples of it pooled (0 where none has any).
+fn pooled(images: &[&IterationImage]) -> Vec<DVec3> {
+    let n_pixels = images.first().map_or(0, |g| g.mean.len());
+    (0..n_pixels)
+        .map(|i| {
+            let (mut s, mut n) = (DVec3::ZERO, 0.0);
+            for g in images {
+                s += g.mean[i].as_dvec3() * g.count[i] as f64;
+                n += g.count[i] as f64;
+            }
+            if n > 0.0 {
+                s / n
+            } else {
+                DVec3::ZERO
+            }
+        })
+        .collect()
+}
+
+/// Each image's terms of the relative variance of the mean against one denominator for all,
+/// aligned: per pixel (those holding at least two samples in every image) and channel,
+/// `v_g(p)/(F̄(p)² + ε)`, with `F̄` the images' samples pooled per pixel and then averaged
+/// over the box of `2·blur + 1` pixels a side about `p` (cut at the image's border). `width`:
+/// the images'.
+pub(super) fn shared_rel_terms(
+    images: &[&IterationImage],
+    width: usize,
+    blur: usize,
+) -> Vec<Vec<f64>> {
+    let n_pixels = images.first().map_or(0, |g| g.mean.len());
+    let height = n_pixels / width.max(1);
+    let pooled = pooled(images);
+    let mut terms = vec![Vec::with_capacity(3 * n_pixels); images.len()];
+    for i in 0..n_pixels {
+        if images.iter().any(|g| g.count[i] < 2) {
+            continue;
+        }
+        let (x, y) = (i % width, i / width);
+        let (mut f, mut n) = (DVec3::ZERO, 0.0);
+        for yy in y.saturating_sub(blur)..=(y + blur).min(height - 1) {
+            for xx in x.saturating_sub(blur)..=(x + blur).min(width - 1) {
+                f += pooled[yy * width + xx];
+                n += 1.0;
+            }
+        }
+        let f = f / n;
+        let d = f * f + DVec3::splat(EPSILON);
+        for (k, g) in images.iter().enumerate() {
+            terms[k].extend((g.variance[i].as_dvec3() / d).to_array());
+        }
+    }
+    terms
 }
 
 /// `a_g` for the pixels of each class, from the other class's `V_g` (its own where the other

@@ -38,6 +38,7 @@ mod adaptive;
 pub mod auto;
 mod combine;
 pub mod edges;
+pub mod gate;
 mod passes;
 mod rrs_training;
 mod settings;
@@ -227,6 +228,10 @@ pub struct PassPlan {
     /// their samples bring: with `--reuse 4` at 10 s, kept at a third of the time, 0.95× on the
     /// door, 1.00× on door-dark and 0.76× on the gap of the image without them).
     pub discard_training: bool,
+    /// A guided render that keeps its training images probes the guide against Phong
+    /// directions during its training and renders the rest without it where it loses
+    /// ([`gate`]), unless this is set (`--guide-gate off`): then it guides whatever it reads.
+    pub ungated: bool,
 }
 
 /// Wall time the samples that a stopped render takes after the stop aim at (see
@@ -389,15 +394,17 @@ pub fn render_passes_with<F: SamplerFactory>(
             trainer.train(start, budget, &mut stats, kept.as_mut())
         });
         let tree = learned.map(|l| &l.tree).or(tree.as_ref());
+        let closed = stats.guide.and_then(|g| g.gate).is_some_and(|g| g.closed());
         let guide = Guiding {
             tree,
             record: false,
         };
-        let rrs =
-            (settings.roulette == Roulette::Ears).then(|| trainer.train_rrs(tree, &mut stats));
+        let rrs = (settings.roulette == Roulette::Ears)
+            .then(|| trainer.train_rrs(tree.filter(|_| !closed), &mut stats));
         let training = start.elapsed();
+        let kernel = Kernel::new(scene, &camera, settings, factory, guide, progress);
         let job = Job {
-            kernel: Kernel::new(scene, &camera, settings, factory, guide, progress)
+            kernel: if closed { kernel.unguided() } else { kernel }
                 .with_rrs(rrs.as_ref().map(|r| r.kernel()))
                 .with_strip(plan.strip.as_deref())
                 .with_edges(edges),
@@ -412,7 +419,11 @@ pub fn render_passes_with<F: SamplerFactory>(
         };
         if let (Some(kept), Some(g)) = (kept.filter(|_| learned.is_none()), &mut stats.guide) {
             let images: Vec<_> = kept.images().collect();
-            g.combined = Some(combine::combine(&mut r.film, &images));
+            let probes = kept.probes();
+            g.combined = Some(combine::combine(&mut r.film, &images)).map(|c| Combination {
+                probes: c.iterations.min(probes),
+                ..c
+            });
             r.estimate = ErrorEstimate::of(&Replicates::new(1, r.film.len()), &r.film);
         }
         stats.elapsed = start.elapsed();

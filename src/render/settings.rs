@@ -150,11 +150,11 @@ pub(super) fn camera_for(scene: &Scene, settings: &RenderSettings) -> Result<Cam
     }
     crate::limits::check_render_memory(settings.width, settings.height, settings.replicates)?;
     if settings.strategy.directions == crate::bsdf::Directions::Guided {
-        // the training images a guided render may keep (`render::combine`): each kept one, a
-        // training iteration's film (56 B) and the final iteration's image when combined
-        let per_pixel = super::KEPT_ITERATIONS as u64 * super::KEPT_BYTES_PER_PIXEL
-            + 56
-            + super::KEPT_BYTES_PER_PIXEL;
+        // the training images a guided render may keep (`render::combine`): each kept one and
+        // each of the gate's probes, a training iteration's film (56 B) and the final
+        // iteration's image when combined
+        let kept = super::KEPT_ITERATIONS as u64 + super::gate::GATE_PROBES as u64;
+        let per_pixel = kept * super::KEPT_BYTES_PER_PIXEL + 56 + super::KEPT_BYTES_PER_PIXEL;
         let pixels = settings.width as u64 * settings.height as u64;
         crate::limits::check_bytes(
             &format!(

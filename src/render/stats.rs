@@ -82,6 +82,8 @@ pub struct GuideStats {
     /// The training iterations kept in the image (`None`: the image is the final iteration
     /// alone).
     pub combined: Option<super::Combination>,
+    /// The guide's gate, where it read a probe ([`super::gate`]).
+    pub gate: Option<super::gate::Gate>,
 }
 
 impl GuideStats {
@@ -101,12 +103,16 @@ impl GuideStats {
             self.tree.bytes as f64 / (1024.0 * 1024.0)
         ) + &match self.combined {
             Some(c) => format!(
-                "guiding: the image combines the final iteration with the last {} training \
-                 iterations by inverse variance (final iteration's weight {:.3})\n",
-                c.iterations, c.final_weight
+                "guiding: the image combines the final iteration with {} training images ({} \
+                 iterations, {} of the gate's probes) by inverse variance (final iteration's \
+                 weight {:.3})\n",
+                c.iterations,
+                c.iterations - c.probes,
+                c.probes,
+                c.final_weight
             ),
             None => String::new(),
-        }
+        } + &self.gate.map_or(String::new(), |g| g.summary())
     }
 }
 

@@ -177,6 +177,27 @@ impl<'a, F: SamplerFactory> Kernel<'a, F> {
         }
     }
 
+    /// The same kernel without its guide: Phong directions where it guided (a guided render
+    /// whose gate closed, and the gate's probes: [`super::gate`]), so its paths draw and cost
+    /// what a `--directions phong` render's do.
+    pub(super) fn unguided(self) -> Self {
+        let phong = |mut i: IntegratorSettings| {
+            if i.directions == Directions::Guided {
+                i.directions = Directions::Phong;
+            }
+            i
+        };
+        Kernel {
+            integrator: phong(self.integrator),
+            integrator_edge: phong(self.integrator_edge),
+            guide: Guiding {
+                tree: None,
+                record: false,
+            },
+            ..self
+        }
+    }
+
     /// The same kernel with edge rays: as many as `map` says in each of its edge pixels
     /// (`None`: none).
     pub(super) fn with_edges(self, edges: Option<&'a EdgeMap>) -> Self {

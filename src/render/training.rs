@@ -3,8 +3,9 @@
 //! records reach the tree in a fixed order, so the tree is a function of the seed alone and
 //! training memory does not grow with the spp.
 
-use super::combine::KeptIterations;
+use super::combine::{IterationImage, KeptIterations};
 use super::edges::EdgeMap;
+use super::gate::Gate;
 use super::*;
 
 /// What a guided render's training needs: the render's scene, camera, settings and plan, and
@@ -98,7 +99,10 @@ impl<'a, F: SamplerFactory> Trainer<'a, F> {
     /// `budget.time` after `start`. A set stop flag ends the training. Training's rays and
     /// thread time are added to `stats`, and its [`GuideStats`] set there.
     /// With `kept`, the images of the iterations of 2 spp or more are kept there (the last
-    /// [`super::combine::KEPT_ITERATIONS`] of them).
+    /// [`super::combine::KEPT_ITERATIONS`] of them), and, unless the plan says
+    /// [`PassPlan::ungated`], the guide's [`Gate`] reads its probes at the iterations it names
+    /// (kept there too); a closed gate ends the training, and its verdict is in the
+    /// [`GuideStats`].
     pub(super) fn train(
         &self,
         start: Instant,
@@ -109,6 +113,7 @@ impl<'a, F: SamplerFactory> Trainer<'a, F> {
         let (lo, hi) = scene_bounds(self.scene);
         let mut tree = Guide::new(lo, hi);
         let mut g = GuideStats::default();
+        let mut gate = (kept.is_some() && !self.plan.ungated).then(Gate::default);
         let mut last = Duration::ZERO;
         for k in 0u32..32 {
             let spp = 1u64 << k;
@@ -124,15 +129,43 @@ impl<'a, F: SamplerFactory> Trainer<'a, F> {
                 }
             }
             let began = Instant::now();
-            let keep = kept.as_deref_mut().filter(|_| spp >= 2);
-            if !self.iteration(k, &mut tree, stats, keep) {
+            let keep = kept.is_some() && spp >= 2;
+            let probing = gate.as_ref().is_some_and(|g| g.probes_at(k, self.pixels()));
+            let rays_before = stats.rays.total();
+            let Some(film) = self.iteration(k, &mut tree, stats, keep || probing) else {
                 break;
+            };
+            let guided_rays = stats.rays.total() - rays_before;
+            let image = film.as_ref().map(IterationImage::of);
+            if let (Some(kept), Some(image)) = (kept.as_deref_mut().filter(|_| keep), &image) {
+                kept.push(image.clone());
+            }
+            if let (Some(gate), Some(image)) = (gate.as_mut().filter(|_| probing), image) {
+                let Some((probe, probe_rays)) = self.probe(k, stats) else {
+                    break; // the stop flag cut the probe: dropped, and training ends
+                };
+                let per_sample = |rays: u64| rays as f64 / (spp * self.pixels()) as f64;
+                gate.read(
+                    k,
+                    (&image, per_sample(guided_rays)),
+                    (&probe, per_sample(probe_rays)),
+                    self.settings.width as usize,
+                );
+                if let Some(kept) = kept.as_deref_mut() {
+                    kept.push_probe(probe);
+                }
+                if gate.closed() {
+                    g.iterations += 1;
+                    g.training_spp += spp;
+                    break;
+                }
             }
             g.iterations += 1;
             g.training_spp += spp;
             last = began.elapsed();
         }
         g.training = start.elapsed();
+        g.gate = gate.filter(|g| g.readings > 0);
         stats.guide = Some(g);
         tree
     }
@@ -140,15 +173,15 @@ impl<'a, F: SamplerFactory> Trainer<'a, F> {
     /// Training iteration `k`: `2^k` spp sampled with `tree` and recorded into it, chunk by
     /// chunk in a fixed order, then the tree refined for the next iteration. It uses seed
     /// `mix64(seed ⊕ (k + 1)·φ)`, whatever the render's first sample or shard: every shard of a
-    /// render learns the same tree. False when the stop flag cut it (its last chunk's records
-    /// dropped, the tree not refined). With `kept`, its image is kept there.
+    /// render learns the same tree. `None` when the stop flag cut it (its last chunk's records
+    /// dropped, the tree not refined); else its film where `image` asks for one.
     fn iteration(
         &self,
         k: u32,
         tree: &mut Guide,
         stats: &mut RenderStats,
-        kept: Option<&mut KeptIterations>,
-    ) -> bool {
+        image: bool,
+    ) -> Option<Option<Film>> {
         let settings = self.settings;
         let spp = 1u64 << k;
         let seed =
@@ -158,9 +191,7 @@ impl<'a, F: SamplerFactory> Trainer<'a, F> {
             size: spp as u32,
         };
         let (mut sum, mut n_samples) = (glam::DVec3::ZERO, 0u64);
-        let mut film = kept
-            .as_ref()
-            .map(|_| Film::new(settings.width, settings.height));
+        let mut film = image.then(|| Film::new(settings.width, settings.height));
         // a chunk's records are added to the tree while the next chunk renders
         let mut pending: Vec<Vec<Record>> = Vec::new();
         for (tiles, samples) in training_chunks(tile_count(settings), spp) {
@@ -185,7 +216,7 @@ impl<'a, F: SamplerFactory> Trainer<'a, F> {
                         .collect()
                 });
             if results.iter().any(|r| r.cut) {
-                return false; // a cut chunk's records are dropped, and training ends
+                return None; // a cut chunk's records are dropped, and training ends
             }
             // piece by piece, in order: a leaf sees the records in the same order as from
             // their concatenation, without a copy of them all
@@ -207,10 +238,45 @@ impl<'a, F: SamplerFactory> Trainer<'a, F> {
         if n_samples > 0 {
             tree.set_image_mean(crate::math::luminance((sum / n_samples as f64).as_vec3()));
         }
-        if let (Some(kept), Some(film)) = (kept, film) {
-            kept.push(&film);
-        }
-        true
+        Some(film)
+    }
+
+    /// Pixels of the image.
+    fn pixels(&self) -> u64 {
+        self.settings.width as u64 * self.settings.height as u64
+    }
+
+    /// The gate's probe of training iteration `k` ([`super::gate`]): `2^k` spp with the guide
+    /// off, on seeds of its own (`mix64` of the iteration's seed input with a constant of its
+    /// own); its image and the rays it traced (added to `stats` with its thread time), or
+    /// `None` where the stop flag cut it.
+    fn probe(&self, k: u32, stats: &mut RenderStats) -> Option<(IterationImage, u64)> {
+        let settings = self.settings;
+        let spp = 1u64 << k;
+        let seed = crate::math::mix64(
+            settings.seed ^ (k as u64 + 1).wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ 0x5bd1_e995,
+        );
+        let guide = Guiding {
+            tree: None,
+            record: false,
+        };
+        let kernel = self.kernel(guide, seed).unguided();
+        let batch = Batch {
+            samples: Samples::Pass {
+                set: SamplePass {
+                    origin: 0,
+                    size: spp as u32,
+                },
+                range: 0..spp,
+            },
+            tiles: 0..tile_count(settings),
+            stop: self.plan.stop.as_deref(),
+        };
+        let mut film = Film::new(settings.width, settings.height);
+        let out = kernel.render(&batch, Some(&mut film));
+        stats.rays.add(&out.stats.rays);
+        stats.thread_time += out.stats.thread_time;
+        (!out.cut).then(|| (IterationImage::of(&film), out.stats.rays.total()))
     }
 }
 

@@ -519,7 +519,8 @@ fn stats_report_the_time_split_and_change_no_pixel() {
 
 /// A guided render says how its time split between training and the final iteration, how big
 /// its tree grew and which training iterations its image combines, on `--stats` and in the
-/// EXR's metadata (`--training-images discard`: none; refused without guided directions);
+/// EXR's metadata (`--training-images discard`: none; refused without guided directions), and
+/// what its gate read (`--guide-gate off`: nothing; refused without guided directions);
 /// `vrpt guide` writes its map and refuses what it cannot show in one line.
 #[test]
 fn guided_renders_report_their_training_and_guide_shows_it() {
@@ -560,7 +561,10 @@ fn guided_renders_report_their_training_and_guide_shows_it() {
     assert_eq!(meta.spp, 16);
     // iterations of 2 and 4 spp hold a variance to weigh by; the one of 1 spp does not
     assert!(
-        err.contains("the image combines the final iteration with the last 2 training iterations"),
+        err.contains(
+            "the image combines the final iteration with 2 training images (2 iterations, 0 of \
+             the gate's probes)"
+        ),
         "{err}"
     );
     assert_eq!(g.combined, 2);
@@ -610,6 +614,40 @@ fn guided_renders_report_their_training_and_guide_shows_it() {
         "training images kept with path reuse",
         "final iteration alone",
     );
+    assert_one_line_error(
+        &render(&["--guide-gate", "on"]),
+        "a gate without guiding",
+        "only a guided render",
+    );
+    assert!(
+        !render(&["--directions", "guided", "--guide-gate", "maybe"])
+            .status
+            .success()
+    );
+    // the gate (`render::gate`): at 64×64 and 128 spp the training's iterations of 32 and
+    // 64 spp hold 2¹⁷ paths, so it reads at least one probe; `off` reads none
+    let gated = |extra: &[&str]| {
+        let mut a = vec!["render", scene.to_str().unwrap(), "--directions", "guided"];
+        a.extend_from_slice(&["--width", "64", "--height", "64", "--spp", "128", "--stats"]);
+        a.extend_from_slice(&["-o", exr.to_str().unwrap()]);
+        a.extend_from_slice(extra);
+        let out = vrpt(&a);
+        let err = String::from_utf8_lossy(&out.stderr).to_string();
+        assert!(out.status.success(), "{err}");
+        let img = vrpt::image_io::read_exr(&exr).unwrap();
+        let meta = vrpt::output::RenderMetadata::require(&img, &exr).unwrap();
+        (err, meta.guide_gate)
+    };
+    let (err, record) = gated(&[]);
+    let record = record.expect("the gate's record in the metadata");
+    assert!(
+        (record.starts_with("closed at ") || record.starts_with("open"))
+            && record.contains("as efficient as the guide, z "),
+        "{record}"
+    );
+    assert!(err.contains(&format!("guiding: gate {record}")), "{err}");
+    let (err, record) = gated(&["--guide-gate", "off"]);
+    assert!(record.is_none() && !err.contains("guiding: gate"), "{err}");
 
     let png = dir.path().join("guide.png");
     let args = |extra: &[&str]| {
