@@ -32,10 +32,12 @@
 //! [`GATE_PROBES`] undecided readings (the render was asked to guide). A closed gate ends the
 //! training, and the final iteration samples with Phong directions.
 //!
-//! **What the image keeps.** Every probe is an unbiased image of the pixel; the probes are kept
-//! with the training iterations and combined with the final iteration by inverse variance
-//! (`render::combine`), so a probe's samples are not thrown away whichever way the gate goes.
-//! The decision is a function of all the training's and probes' pixels, as the guide itself
+//! **What the image keeps.** Every probe is an unbiased image of the pixel. Where the gate
+//! closes, the probes are kept with the training iterations and combined with the final
+//! iteration by inverse variance (`render::combine`): they are the final iteration's estimator.
+//! Where it stays open they are dropped: Phong images where the guide wins have heavier tails
+//! than the guided ones, their variances read low at a few samples per pixel, and kept they
+//! cost the gap 1.46× in relMSE at 10 s. The decision is a function of all the training's and probes' pixels, as the guide itself
 //! is; the combination weighs a pixel by the other half of the image's variances, and the
 //! decision's dependence on one pixel's samples is of the same second order as the guide's.
 

@@ -417,7 +417,10 @@ pub fn render_passes_with<F: SamplerFactory>(
         } else {
             job.uniform(&mut stats)?
         };
-        if let (Some(kept), Some(g)) = (kept.filter(|_| learned.is_none()), &mut stats.guide) {
+        if let (Some(mut kept), Some(g)) = (kept.filter(|_| learned.is_none()), &mut stats.guide) {
+            if !closed {
+                kept.drop_probes();
+            }
             let images: Vec<_> = kept.images().collect();
             let probes = kept.probes();
             g.combined = Some(combine::combine(&mut r.film, &images)).map(|c| Combination {

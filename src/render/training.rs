@@ -136,6 +136,8 @@ impl<'a, F: SamplerFactory> Trainer<'a, F> {
                 break;
             };
             let guided_rays = stats.rays.total() - rays_before;
+            // the next iteration's estimate reads this one's time, not its probe's
+            let took = began.elapsed();
             let image = film.as_ref().map(IterationImage::of);
             if let (Some(kept), Some(image)) = (kept.as_deref_mut().filter(|_| keep), &image) {
                 kept.push(image.clone());
@@ -162,7 +164,7 @@ impl<'a, F: SamplerFactory> Trainer<'a, F> {
             }
             g.iterations += 1;
             g.training_spp += spp;
-            last = began.elapsed();
+            last = took;
         }
         g.training = start.elapsed();
         g.gate = gate.filter(|g| g.readings > 0);
