@@ -590,10 +590,10 @@ fn glossy_plates_agree_for_every_light_choice() {
 /// high gave −17.7 at 8192 spp of final iteration; the combined z of a fixed bias scales with
 /// √spp). The lamp (2026-11-28, at 4096 spp): worst |z| 2.07 and 3.18 at test seeds 0 and 3,
 /// combined z −3.27 to 1.27 (both renders of a scene share its reference, whose own noise moves
-/// their combined z together). With the guide's gate (`render::gate`, on by default), the
-/// probes' images are in each image too, and at 32×16 the Cornell box's gate closes (in 3 of 3
-/// renders at seeds 1–3 from the command line, z 4.4–8.2 at 512 spp): the test then holds an
-/// image whose final iteration sampled with Phong directions after a guided training.
+/// their combined z together). With the guide's gate (`render::gate`, on by default), at 32×16
+/// the Cornell box's gate closes (in 3 of 3 renders at seeds 1–3 from the command line, z
+/// 4.4–8.2 at 512 spp): the test then holds an image whose final iteration sampled with Phong
+/// directions after a guided training, combined with the training images and the probes.
 #[test]
 fn guided_directions_agree_on_the_cornell_box_the_door_and_through_glass() {
     use vrpt::sampler::SamplerKind::Stratified;
