@@ -94,17 +94,20 @@ impl KeptIterations {
         self.images.iter().chain(&self.probes)
     }
 
-    /// Drop the probes: a gate that stayed open keeps its training iterations alone. Its probes
-    /// sampled with Phong directions where the guide won, with heavier tails than the guided
-    /// images: on the gap at 10 s, kept, they read low variances at a few samples per pixel
-    /// and cost the image 1.46× in relMSE against the render without the gate (two seed pairs).
-    pub(super) fn drop_probes(&mut self) {
-        self.probes.clear();
-    }
-
-    /// How many of [`Self::images`] are probes.
-    pub(super) fn probes(&self) -> u32 {
-        self.probes.len() as u32
+    /// Combine the final iteration's sums in `film` with what is kept ([`combine`]): the
+    /// training iterations, and the gate's probes where it `closed`. An open gate's probes are
+    /// dropped: Phong images where the guide wins have heavier tails than the guided ones,
+    /// their variances read low at a few samples per pixel, and kept they cost the gap 1.46×
+    /// in relMSE at 10 s against the render without the gate (two seed pairs).
+    pub(super) fn combine_into(mut self, film: &mut Film, closed: bool) -> Combination {
+        if !closed {
+            self.probes.clear();
+        }
+        let images: Vec<&IterationImage> = self.images().collect();
+        Combination {
+            probes: self.probes.len() as u32,
+            ..combine(film, &images)
+        }
     }
 }
 

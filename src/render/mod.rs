@@ -417,16 +417,8 @@ pub fn render_passes_with<F: SamplerFactory>(
         } else {
             job.uniform(&mut stats)?
         };
-        if let (Some(mut kept), Some(g)) = (kept.filter(|_| learned.is_none()), &mut stats.guide) {
-            if !closed {
-                kept.drop_probes();
-            }
-            let images: Vec<_> = kept.images().collect();
-            let probes = kept.probes();
-            g.combined = Some(combine::combine(&mut r.film, &images)).map(|c| Combination {
-                probes: c.iterations.min(probes),
-                ..c
-            });
+        if let (Some(kept), Some(g)) = (kept.filter(|_| learned.is_none()), &mut stats.guide) {
+            g.combined = Some(kept.combine_into(&mut r.film, closed));
             r.estimate = ErrorEstimate::of(&Replicates::new(1, r.film.len()), &r.film);
         }
         stats.elapsed = start.elapsed();
