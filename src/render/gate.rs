@@ -62,10 +62,15 @@ pub const GATE_PROBES: u32 = 3;
 /// The z beyond which the gate decides (closing, on two readings in a row).
 pub const GATE_Z: f64 = 3.0;
 /// The z beyond which one reading closes the gate. A guide still learning read Phong
-/// directions better at z up to 5.1 (the lamp: see [`GATE_PATHS`]); the glossy plates read
-/// z 22–28 at their first probe at 256×192 (196k paths), and waiting for a second reading cost
-/// them an iteration of 8 spp and its probe: about 8% of a 10-s render.
-pub const GATE_Z_ALONE: f64 = 10.0;
+/// directions better at z up to 5.1 (the lamp: see [`GATE_PATHS`]; at 96×72 its first readings,
+/// seeds 1–6, are all the guide's, z −3.1 to −5.3); the glossy plates read z 22–28 at their
+/// first probe at 256×192 (196k paths), and the night hall (192×108) z 6.5–8.1 at its first
+/// (8 spp), Phong ahead 1.2× where guided+reuse4 reaches 0.57× of reuse4 at 10 s. Waiting for a
+/// second reading cost the plates an iteration of 8 spp and its probe (about 8% of a 10-s
+/// render), the night hall 16 spp and its probe: auto rendering guided+reuse4 there reached
+/// 0.70× of reuse4 at 10 s waiting for a second reading beyond [`GATE_Z`] (10 before), 0.84×
+/// closing at the first beyond 6.
+pub const GATE_Z_ALONE: f64 = 6.0;
 /// The half-width in pixels of the box that averages the reading's denominator.
 pub const GATE_BLUR: usize = 4;
 

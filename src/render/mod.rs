@@ -228,9 +228,10 @@ pub struct PassPlan {
     /// their samples bring: with `--reuse 4` at 10 s, kept at a third of the time, 0.95× on the
     /// door, 1.00× on door-dark and 0.76× on the gap of the image without them).
     pub discard_training: bool,
-    /// A guided render that keeps its training images probes the guide against Phong
-    /// directions during its training and renders the rest without it where it loses
-    /// ([`gate`]), unless this is set (`--guide-gate off`): then it guides whatever it reads.
+    /// A guided render that trains its own guide over the whole image probes the guide against
+    /// Phong directions during its training and renders the rest without it where it loses
+    /// ([`gate`]; where it gates: `gates`), unless this is set (`--guide-gate off`): then it
+    /// guides whatever it reads.
     pub ungated: bool,
 }
 
@@ -391,7 +392,8 @@ pub fn render_passes_with<F: SamplerFactory>(
         };
         let tree = (guided && learned.is_none()).then(|| {
             let budget = TrainingBudget::of_render(settings, plan);
-            trainer.train(start, budget, &mut stats, kept.as_mut())
+            let gate = gates(settings, plan).then(gate::Gate::default);
+            trainer.train(start, budget, &mut stats, kept.as_mut(), gate)
         });
         let tree = learned.map(|l| &l.tree).or(tree.as_ref());
         let closed = stats.guide.and_then(|g| g.gate).is_some_and(|g| g.closed());
@@ -463,12 +465,24 @@ fn edge_map(
 /// Whether a guided render of `settings` under `plan` that trains its own guide keeps its
 /// training iterations in the image ([`PassPlan::discard_training`]).
 fn keeps_training(settings: &RenderSettings, plan: &PassPlan) -> bool {
+    gates(settings, plan) && !plan.discard_training && settings.reuse <= 1
+}
+
+/// Whether a guided render of `settings` under `plan` that trains its own guide tests it with
+/// its [`gate`] while it trains: over the whole image (no strip, no shard: every shard of a
+/// render decides alike), one replicate, uniform passes, unless [`PassPlan::ungated`]. With
+/// path reuse too (its training iterations are rendered without reuse, as their paths record
+/// their own bounces, and so are the probes: the gate compares the guide against Phong
+/// directions as a render without reuse would; it is the same verdict as with reuse on the
+/// shipped scenes, `docs/guiding.md`), and where the training images are discarded: its
+/// probes are then discarded too.
+fn gates(settings: &RenderSettings, plan: &PassPlan) -> bool {
     settings.strategy.directions == Directions::Guided
         && plan.guide.is_none()
-        && !plan.discard_training
+        && !plan.ungated
         && settings.replicates == 1
-        && settings.reuse <= 1
         && plan.shard.is_none()
+        && plan.strip.is_none()
         && !plan.adaptive
 }
 

@@ -198,6 +198,11 @@ impl<'a, F: SamplerFactory> Kernel<'a, F> {
         }
     }
 
+    /// The same kernel without path reuse (blocks of one pixel).
+    pub(super) fn without_reuse(self) -> Self {
+        Kernel { reuse: 1, ..self }
+    }
+
     /// The same kernel with edge rays: as many as `map` says in each of its edge pixels
     /// (`None`: none).
     pub(super) fn with_edges(self, edges: Option<&'a EdgeMap>) -> Self {

@@ -99,21 +99,20 @@ impl<'a, F: SamplerFactory> Trainer<'a, F> {
     /// `budget.time` after `start`. A set stop flag ends the training. Training's rays and
     /// thread time are added to `stats`, and its [`GuideStats`] set there.
     /// With `kept`, the images of the iterations of 2 spp or more are kept there (the last
-    /// [`super::combine::KEPT_ITERATIONS`] of them), and, unless the plan says
-    /// [`PassPlan::ungated`], the guide's [`Gate`] reads its probes at the iterations it names
-    /// (kept there too); a closed gate ends the training, and its verdict is in the
-    /// [`GuideStats`].
+    /// [`super::combine::KEPT_ITERATIONS`] of them). With a `gate` (where the render gates:
+    /// [`super::gates`]), it reads its probes at the iterations it names (kept with `kept`); a
+    /// closed gate ends the training, and its verdict is in the [`GuideStats`].
     pub(super) fn train(
         &self,
         start: Instant,
         budget: TrainingBudget,
         stats: &mut RenderStats,
         mut kept: Option<&mut KeptIterations>,
+        mut gate: Option<Gate>,
     ) -> Guide {
         let (lo, hi) = scene_bounds(self.scene);
         let mut tree = Guide::new(lo, hi);
         let mut g = GuideStats::default();
-        let mut gate = (kept.is_some() && !self.plan.ungated).then(Gate::default);
         let mut last = Duration::ZERO;
         for k in 0u32..32 {
             let spp = 1u64 << k;
@@ -249,7 +248,7 @@ impl<'a, F: SamplerFactory> Trainer<'a, F> {
     }
 
     /// The gate's probe of training iteration `k` ([`super::gate`]): `2^k` spp with the guide
-    /// off, on seeds of its own (`mix64` of the iteration's seed input with a constant of its
+    /// off and without path reuse (as the training iterations render), on seeds of its own (`mix64` of the iteration's seed input with a constant of its
     /// own); its image and the rays it traced (added to `stats` with its thread time), or
     /// `None` where the stop flag cut it.
     fn probe(&self, k: u32, stats: &mut RenderStats) -> Option<(IterationImage, u64)> {
@@ -262,7 +261,7 @@ impl<'a, F: SamplerFactory> Trainer<'a, F> {
             tree: None,
             record: false,
         };
-        let kernel = self.kernel(guide, seed).unguided();
+        let kernel = self.kernel(guide, seed).unguided().without_reuse();
         let batch = Batch {
             samples: Samples::Pass {
                 set: SamplePass {
@@ -374,7 +373,7 @@ pub fn learn_guide_with(
                     factory,
                     edges: self.7,
                 };
-                trainer.train(self.5, self.4, self.6, None)
+                trainer.train(self.5, self.4, self.6, None, None)
             }
         }
         let work = Train(

@@ -292,13 +292,14 @@ fn a_handed_over_guide_renders_as_the_guide_learned_in_place() {
 /// seeds 1–3. On the glossy plates, whose guide learns nothing NEE and the Phong lobes
 /// do not already carry, the probes read Phong directions more efficient (1.4–1.9× at z 5 to 61
 /// over seeds and sizes while building it) and the gate closes: the training ends, the image
-/// holds the probes, the final iteration samples with Phong directions; on the door, where
+/// holds the probes, the final iteration samples with Phong directions (with path reuse too,
+/// seed 1: its training and probes render without reuse); on the door, where
 /// the light comes through a slit, it opens for good (the guide ahead at z −4 to −34). The
 /// closed image is unbiased: its mean against a `--directions phong` render of the same size
 /// and 256 spp, `z = Δ/√(σ_a² + σ_b²)` per channel with each image mean's variance the sum of its
 /// pixels' variances of the mean over the pixels squared (independent pixels; each image
 /// holds 3M paths or more, so the mean is near normal); nine tests, bound 4.4 (two-sided,
-/// about 1e-4 in all).
+/// about 1e-4 in all; with `--reuse 4` on seed 1 three more: ten in all).
 #[test]
 fn the_gate_closes_on_the_glossy_plates_and_opens_on_the_door() {
     use vrpt::render::{gate::Verdict, render_passes, NoProgress, PassPlan};
@@ -341,6 +342,19 @@ fn the_gate_closes_on_the_glossy_plates_and_opens_on_the_door() {
         let ((ma, va), (mb, vb)) = (image_mean(&r.film), image_mean(&p.film));
         let z = (ma - mb) / (va + vb).powf(0.5);
         assert!(z.abs().max_element() < 4.4, "seed {seed}: z {z}");
+        if seed == 1 {
+            // with path reuse the gate reads the same (training and probes both render
+            // without reuse) and closes; the probes and training images are not kept
+            let s = RenderSettings { reuse: 4, ..s };
+            let r = render_passes(&plates, &s, &plan, &NoProgress).unwrap();
+            let g = r.stats.guide.unwrap();
+            let gate = g.gate.expect("the reusing render gates too");
+            assert_eq!(gate.verdict, Verdict::Closed, "reuse: {gate:?}");
+            assert!(g.combined.is_none() && g.training_spp < 127, "{g:?}");
+            let (mr, vr) = image_mean(&r.film);
+            let z = (mr - mb) / (vr + vb).powf(0.5);
+            assert!(z.abs().max_element() < 4.4, "reuse: z {z}");
+        }
 
         let r = render_passes(
             &door,
