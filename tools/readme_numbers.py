@@ -534,8 +534,8 @@ def auto():
     seed pairs."""
     print("`vrpt render scenes/SCENE --spp 1048576 --time-limit 10 --seed S` with `--strategy mis`, "
           "`--strategy mis --reuse 4`, `--directions guided`, `--directions guided --reuse 4` or "
-          "`--strategy auto` (its default candidates mis, mis+reuse4 and stratified+guided+mis+reuse4, "
-          "the last piloted only where reuse wins), seed pairs (1, 2), (3, 4) and (5, 6), configs "
+          "`--strategy auto` (its default candidates mis, mis+reuse4 and their guided twins, the twin "
+          "of the pilots' choice rendered with its gate where reuse wins or light is caustic), seed pairs (1, 2), (3, 4) and (5, 6), configs "
           "interleaved; relMSE of one render from its pair, `mean((a − b)²/(2(c² + 0.01)))`, c one "
           "more render shared by every config (`vrpt diff --pair-denominator`); ratio above 1 means "
           "auto wins:\n")
@@ -547,7 +547,9 @@ def auto():
     for scene in AUTO_SCENES:
         log = []
         r = equal_time_pairs(scene, None, None, 10, configs, pairs=((1, 2), (3, 4), (5, 6)), log=log)
-        chosen = [re.search(r"^  (\S+)\s.*<- chosen", e, re.M).group(1) for l, e in log if l == "auto"]
+        picks_of = [re.search(r"^  (\S+)\s.*<- chosen(, with guided directions)?", e, re.M)
+                    for l, e in log if l == "auto"]
+        chosen = [m.group(1) + (" (its guided twin)" if m.group(2) else "") for m in picks_of]
         mm, mr, mg, mgr = (r[k][0] for k in ("mis", "reuse", "guided", "guided+reuse"))
         ma, sa, _ = r["auto"]
         best = min(mm, mr, mg, mgr)

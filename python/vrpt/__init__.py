@@ -275,7 +275,8 @@ def render(
     (``independent``, ``stratified``, ``importance``, ``combined``, ``nee``, ``mis``; default:
     vrpt's default) or ``auto`` (a pilot chooses among ``auto_candidates``, strategies with
     ``+reuseK`` for path reuse or ``+ears`` for EARS such as ``"mis,mis+reuse4"``; the default
-    ``"mis,mis+reuse4,stratified+guided+mis+reuse4"``, the guided one piloted only where reuse wins;
+    ``"mis,mis+reuse4,stratified+guided+mis,stratified+guided+mis+reuse4"``, the guided twin of
+    the unguided choice rendered with its gate, not piloted, where reuse wins or light is caustic;
     what it measured is in
     ``summary`` and ``metadata["auto"]``), and ``sampler``, ``directions`` (``guided`` for path
     guiding), ``lights``, ``light_points``, ``light_choice`` set one part of it. ``roulette`` is

@@ -61,25 +61,48 @@
 //! not `--directions guided`'s (whose guide trains on the whole image), but unbiased for the
 //! same reason: the guide and the choice come from samples independent of the image's.
 //!
-//! Guided candidates (but a guided first one) are piloted only where an unguided candidate
+//! Guided candidates (but a guided first one) are staged ([`GuidedStage`]): the unguided
+//! candidates are piloted first, and the guided ones come in only where an unguided candidate
 //! other than the first beat it beyond the noise, where at least [`CAUSTIC_GATE`] of the first
 //! candidate's pilot's light came as caustics (through a mirror or glass after a Phong vertex:
 //! light only a bounce finds, which a guide learns to aim at), or where the list names no
-//! unguided one but the first: the unguided candidates are piloted first, and a guided one's
-//! guide is trained and piloted only where they switched or the caustics call for it. The default candidates ([`default_candidates`])
-//! add guided directions to path reuse that way: where reuse beats mis the light comes by
-//! indirect paths, which is where a guide learns something, and on the rooms lit through a door
-//! at 10 s the guided and reusing candidate was chosen in every render and gained 6.8–7.8× over
-//! mis where reuse alone gains 3.5–4.3×; where reuse does not win (direct light, glossy
-//! reflections) a guided pilot read no better and its training cost those renders 8–19% of
-//! their samples (the glossy plates: 229 spp at 10 s against mis's 276). The rule is fixed before
-//! any pilot renders, and the choice is still made from the pilots alone. A guided candidate's
-//! pilot does not see the light that comes by rare paths better than the others' (on the gap,
-//! door-dark and the glass scene at 10 s the guided pilot without reuse read 0.35–1.16× the
-//! efficiency of mis, where guided renders win 1.5–4.2× over mis), so guided directions alone
-//! are not a default candidate. Path reuse learns nothing,
-//! so a pilot sees what the render will get; EARS learns its factors from its pilot's own
-//! training, shorter than a render's, and is not a default candidate either (where it wins,
+//! unguided one but the first (then they are piloted with the rest). Where they come in, the
+//! one considered is a *guided twin* ([`Candidate::guided`]: the same but for guided
+//! directions) where the list holds it, else every guided one:
+//!
+//! - **The twin rendered, not piloted.** Where the list holds the guided twin of the unguided
+//!   pilots' choice, the twin is chosen without a pilot and renders as `--directions guided`
+//!   does: its own guide trained over the whole image, and the guide's gate ([`super::gate`]),
+//!   which compares it with Phong directions during the training and renders the rest with
+//!   them where the guide loses. A pilot's guide, trained on a quarter of the tiles with an
+//!   eighth of the time, is poorer than a guided render's own, and its training and pilot took
+//!   10–17% of a 10-s render: at 10 s (three seed pairs, interleaved) the twin rendered
+//!   lowered auto's relMSE 1.29× on the door, 1.16× on door-dark and 1.08× on the gap against
+//!   the twin piloted with a handed guide, reaching 0.97–1.04× of `--directions guided --reuse
+//!   4`; on the Cornell box (guiding adds nothing) 0.97×; in the night hall, where the guide
+//!   loses 1.2× by its gate's first reading, 0.96× (with its gate closing at that reading: see
+//!   [`super::gate::GATE_Z_ALONE`]; 0.82× when it waited for a second).
+//! - **Caustics: the first candidate's twin after its pilot alone.** Next-event estimation
+//!   never reaches a caustic; a guide is what finds it. Path reuse shares the light samples'
+//!   connections between pixels, and a caustic comes by no connection: with guided directions
+//!   it cost the lamp 1.08× and the glass scene 1.33× in relMSE at 10 s. So where the first
+//!   candidate's pilot finds caustics and its twin is listed, no other candidate is piloted.
+//!   The gate, not a pilot, guards the choice, so [`CAUSTIC_GATE`] is low: any scene with a
+//!   mirror or glass in the light's way.
+//! - Where the twin is not listed, every guided candidate is piloted after the unguided ones:
+//!   a guided candidate's pilot first learns its guide on the pilots' strip (below), and the
+//!   render chosen samples with it.
+//!
+//! Where they do not come in (direct light, glossy reflections) a guided pilot read no better
+//! and its training cost those renders 8–19% of their samples (the glossy plates: 229 spp at 10 s
+//! against mis's 276). The rule is fixed before any pilot renders, and the choice is still made
+//! from the pilots alone (the gate of a rendered twin from its own training, as any guided
+//! render's). A guided candidate's pilot does not see the light that comes by rare paths better
+//! than the others' (on the gap, door-dark and the glass scene at 10 s the guided pilot without
+//! reuse read 0.35–1.16× the efficiency of mis, where guided renders win 1.5–4.2× over mis), so
+//! guided directions alone are a default candidate only as mis's twin. Path reuse learns
+//! nothing, so a pilot sees what the render will get; EARS learns its factors from its pilot's
+//! own training, shorter than a render's, and is not a default candidate either (where it wins,
 //! `mis+reuse4` wins more: `docs/roulette.md`).
 
 use super::{LearnedGuide, PassPlan, RenderSettings, TileStrip, TrainingBudget};
@@ -212,6 +235,17 @@ impl Candidate {
         })
     }
 
+    /// The same candidate with guided directions: its guided twin.
+    pub fn guided(&self) -> Candidate {
+        Candidate {
+            strategy: Strategy {
+                directions: Directions::Guided,
+                ..self.strategy
+            },
+            ..*self
+        }
+    }
+
     /// The settings that render this candidate: `settings` with its strategy, reuse and
     /// roulette.
     pub fn settings(&self, settings: &RenderSettings) -> RenderSettings {
@@ -244,11 +278,13 @@ impl Candidates {
 pub const AUTO_REUSE: u32 = 4;
 
 /// The candidates when none are named: today's default (stratified points, Phong directions,
-/// MIS), the same with path reuse in blocks of [`AUTO_REUSE`]², and that with guided directions
-/// too, which is piloted (its guide trained first) only where path reuse beat mis in its pilot
-/// or the light is caustic (the module doc): on the rooms lit through a door or a slit, guiding and reuse together gain
-/// 2× over reuse alone at 10 s, and where reuse does not win neither does the guide, whose
-/// training would cost those renders an eighth of their time (`docs/performance.md`).
+/// MIS), the same with path reuse in blocks of [`AUTO_REUSE`]², and the guided twins of both
+/// ([`Candidate::guided`]), staged (the module doc): where the light is caustic mis's twin
+/// renders with its gate after mis's pilot alone, where path reuse beat mis the reusing twin
+/// renders with its gate (on the rooms lit through a door or a slit, guiding and reuse together
+/// gain 2× over reuse alone at 10 s), and elsewhere neither (where reuse does not win neither
+/// does the guide, whose training would cost those renders a third of their time:
+/// `docs/performance.md`).
 pub fn default_candidates() -> Vec<Candidate> {
     let mis = Strategy::default();
     let reuse = Candidate {
@@ -262,6 +298,7 @@ pub fn default_candidates() -> Vec<Candidate> {
     vec![
         Candidate::from(mis),
         reuse,
+        Candidate::from(guided),
         Candidate {
             strategy: guided,
             ..reuse
@@ -306,14 +343,15 @@ pub struct PilotRow {
 pub struct Choice {
     /// The candidate chosen.
     pub candidate: Candidate,
-    /// Its row.
+    /// Its row (with [`GuidedStage::Rendered`], its unguided twin's: the chosen one has none).
     pub index: usize,
     /// The candidates' pilots: the unguided candidates' in the order given, then the guided
     /// ones' (but a guided first candidate's, which comes first) when they were piloted.
     pub rows: Vec<PilotRow>,
-    /// The guided candidates not piloted, since no unguided candidate beat the first and too
-    /// little of the first's light was caustic (the module doc).
+    /// The candidates neither piloted nor rendered ([`Choice::stage`] says why).
     pub unpiloted: Vec<Candidate>,
+    /// Whether the guided candidates were piloted, rendered without a pilot or neither.
+    pub stage: GuidedStage,
     /// What the costs count.
     pub cost: Cost,
     /// `z` of the most efficient candidate against the first (0 when it is the first).
@@ -332,17 +370,19 @@ pub struct Choice {
 
 /// The share of the first candidate's pilot's light that came as caustics (through a mirror or
 /// glass after a Phong vertex: [`crate::integrator::RayCounts::caustic_share`]) at or above which
-/// the guided candidates are piloted even where no unguided candidate beat the first (the module
-/// doc). Caustics are light no light sample reaches, which only a bounce aimed at the mirror or
-/// glass finds, and path reuse does not help there; a guide learns to aim. Measured with
-/// `vrpt render SCENE --spp 16` (the share is printed with the rays): the lamp behind its glass
-/// shade 54% (the rest is the lamp seen through the shade from the camera, not a caustic),
-/// the glass scene 9%, every other shipped scene 0 (no mirror or glass). At 10 s on the lamp
-/// a guided render is 1.9× as efficient as mis, and auto, which did not pilot it (path reuse does
-/// not beat mis there), reached 0.59× of it; on the glass scene guided directions gain 1.3×,
-/// which a guided pilot without reuse did not see (0.35–1.16× the efficiency of mis on the gap,
-/// door-dark and glass). A quarter lies between the two measured shares.
-pub const CAUSTIC_GATE: f64 = 0.25;
+/// the guided candidates come in even where no unguided candidate beat the first, the first's
+/// guided twin rendered with its gate and no other pilot where the list holds it (the module
+/// doc). Caustics are light no light sample reaches, which only a bounce aimed at
+/// the mirror or glass finds, and path reuse does not help there; a guide learns to aim.
+/// Measured with `vrpt render SCENE --spp 16` (the share is printed with the rays): the lamp
+/// behind its glass shade 54% (the rest is the lamp seen through the shade from the camera, not
+/// a caustic), the glass scene 9%, every other shipped scene 0 (no mirror or glass); auto's mis
+/// pilots read the lamp 99% and the glass scene 6–7% (seeds 1–3, 10 s). Guided directions gain
+/// 1.9× over mis at 10 s on the lamp and 1.9× on the glass scene; auto, before the twin was
+/// rendered, reached 0.59–0.65× of the best there. A share of 1/50 admits both: where a guide
+/// then learns nothing, its gate closes and the render pays its training up to the probe (the
+/// glossy plates: 0.97× of Phong directions at 10 s).
+pub const CAUSTIC_GATE: f64 = 0.02;
 
 /// The share of the render's budget a guided candidate's guide trains on, before its pilot: its
 /// training iterations ([`crate::guiding`]) on the pilots' strip take at most this share of the
@@ -442,36 +482,23 @@ pub fn choose(
             pilot_spp((fits as u32).min(settings.spp))
         }
     };
-    // the unguided candidates first; the guided ones (but a guided first) only where one of
-    // those beat the first beyond the noise, where the first's light is caustic enough, or where
-    // no unguided one but the first is listed (the module doc)
-    let n = candidates.len();
-    let guided = |k: usize| k > 0 && candidates[k].strategy.directions == Directions::Guided;
-    let staged = (1..n).any(|k| !guided(k)) && (1..n).any(guided);
-    let mut ks: Vec<usize> = (0..n).filter(|&k| !staged || !guided(k)).collect();
-    let mut done = ks
-        .iter()
-        .map(|&k| pilots.run(k, spp))
-        .collect::<Result<Vec<_>>>()?;
+    let (ks, done, stage) = pilot_staged(&mut pilots, candidates, spp)?;
     let caustic = done.first().map_or(0.0, |p| p.caustic);
-    if staged
-        && (caustic >= CAUSTIC_GATE || decide(&shared_denominator(pilots.width, &done)).0 != 0)
-    {
-        for k in (1..n).filter(|&k| guided(k)) {
-            done.push(pilots.run(k, spp)?);
-            ks.push(k);
-        }
-    }
     let rows = shared_denominator(pilots.width, &done);
     let (index, z) = decide(&rows);
+    let candidate = match stage {
+        GuidedStage::Rendered => rows[index].candidate.guided(),
+        _ => rows[index].candidate,
+    };
     Ok(Choice {
-        candidate: rows[index].candidate,
+        candidate,
         index,
         rows,
-        unpiloted: (0..n)
-            .filter(|k| !ks.contains(k))
+        unpiloted: (0..candidates.len())
+            .filter(|&k| !ks.contains(&k) && candidates[k] != candidate)
             .map(|k| candidates[k])
             .collect(),
+        stage,
         cost,
         z,
         caustic,
@@ -479,6 +506,61 @@ pub fn choose(
         tiles: pilots.tiles,
         guide: pilots.guides[ks[index]].take(),
     })
+}
+
+/// The pilots of `candidates` at `spp`, staged (the module doc): the first; where its light is
+/// caustic enough and its guided twin is listed, no more (the twin renders); else the other
+/// unguided ones, and where one of them beat the first or the light is caustic, no more where
+/// the guided twin of their choice is listed (it renders), else every guided candidate. The
+/// candidates piloted, their pilots and what became of the guided ones.
+fn pilot_staged(
+    pilots: &mut Pilots,
+    candidates: &[Candidate],
+    spp: u32,
+) -> Result<(Vec<usize>, Vec<pilot::Pilot>, GuidedStage)> {
+    let n = candidates.len();
+    let guided = |k: usize| k > 0 && candidates[k].strategy.directions == Directions::Guided;
+    let staged = (1..n).any(|k| !guided(k)) && (1..n).any(guided);
+    let twin_of = |c: Candidate| (1..n).find(|&k| guided(k) && candidates[k] == c.guided());
+    let mut ks = vec![0];
+    let mut done = vec![pilots.run(0, spp)?];
+    let caustic = done[0].caustic >= CAUSTIC_GATE;
+    if staged && caustic && twin_of(candidates[0]).is_some() {
+        return Ok((ks, done, GuidedStage::Rendered));
+    }
+    for k in (1..n).filter(|&k| !staged || !guided(k)) {
+        done.push(pilots.run(k, spp)?);
+        ks.push(k);
+    }
+    let winner = done[decide(&shared_denominator(pilots.width, &done)).0].candidate;
+    if !staged || !(caustic || winner != candidates[0]) {
+        return Ok((ks, done, GuidedStage::Shut));
+    }
+    if twin_of(winner).is_some() {
+        return Ok((ks, done, GuidedStage::Rendered));
+    }
+    for k in (1..n).filter(|&k| guided(k)) {
+        done.push(pilots.run(k, spp)?);
+        ks.push(k);
+    }
+    Ok((ks, done, GuidedStage::Piloted))
+}
+
+/// What became of the guided candidates of a list that stages them (the module doc).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GuidedStage {
+    /// Not piloted: no unguided candidate beat the first, and too little of the first's light
+    /// was caustic (or the list does not stage its guided candidates).
+    Shut,
+    /// Piloted after the unguided ones, every guided candidate (its guide trained first on the
+    /// pilots' strip): the unguided pilots' choice has no guided twin in the list.
+    Piloted,
+    /// The guided twin ([`Candidate::guided`]) of the unguided pilots' choice (of the first
+    /// alone, where its light is caustic enough: [`CAUSTIC_GATE`]) is listed: it is rendered
+    /// without a pilot, its guide trained over the whole image as `--directions guided` trains
+    /// it, and its gate ([`super::gate`]) rendering the rest with Phong directions where the
+    /// guide loses.
+    Rendered,
 }
 
 impl Choice {

@@ -34,7 +34,11 @@ impl Choice {
         );
         let e0 = self.rows.first().map_or(f64::NAN, |r| r.efficiency);
         for (k, r) in self.rows.iter().enumerate() {
-            let mark = if k == self.index { " <- chosen" } else { "" };
+            let mark = match (k == self.index, self.stage) {
+                (false, _) => "",
+                (true, GuidedStage::Rendered) => " <- chosen, with guided directions",
+                (true, _) => " <- chosen",
+            };
             s += &format!(
                 "  {:w$}  {:>10.3e}  {:>9.1e}  {:>9.3}  {:>10.2}{mark}\n",
                 r.candidate.to_string(),
@@ -53,13 +57,24 @@ impl Choice {
             100.0 * self.caustic,
             100.0 * CAUSTIC_GATE
         );
-        if !self.unpiloted.is_empty() {
+        let chosen = self.rows.get(self.index).map(|r| r.candidate.to_string());
+        let chosen = chosen.unwrap_or_default();
+        let unpiloted = match self.stage {
+            GuidedStage::Shut => format!("guided, no unguided candidate beat {first}, {caustic}"),
+            GuidedStage::Piloted => format!("guided, not the guided twin of {chosen}"),
+            GuidedStage::Rendered => format!("{chosen}'s guided twin renders instead"),
+        };
+        if self.stage == GuidedStage::Rendered {
             s += &format!(
-                "  {}: not piloted (guided, no unguided candidate beat {first}, {caustic})\n",
-                self.unpiloted_names()
+                "  {}: rendered without a pilot ({caustic}): its guide trained over the image, \
+                 its gate against Phong directions\n",
+                self.candidate
             );
-        } else if self.caustic >= CAUSTIC_GATE {
+        } else if self.stage == GuidedStage::Piloted && self.caustic >= CAUSTIC_GATE {
             s += &format!("  guided candidates piloted: {caustic}\n");
+        }
+        if !self.unpiloted.is_empty() {
+            s += &format!("  {}: not piloted ({unpiloted})\n", self.unpiloted_names());
         }
         s + &format!(
             "  efficiency relative to {first}; the best against it: z = {:.1} (switch above {SWITCH_Z}){}\n",
@@ -105,8 +120,12 @@ impl Choice {
             true => String::new(),
             false => format!(" (not piloted: {})", self.unpiloted_names()),
         };
+        let rendered = match self.stage {
+            GuidedStage::Rendered => " (rendered without a pilot, gated)",
+            _ => "",
+        };
         format!(
-            "chose {}; efficiency {}{unpiloted}; z {:.2}; caustic {:.3}; pilots {} spp on {} of {} tiles, cost {}",
+            "chose {}{rendered}; efficiency {}{unpiloted}; z {:.2}; caustic {:.3}; pilots {} spp on {} of {} tiles, cost {}",
             self.candidate,
             rows.join(", "),
             self.z,

@@ -91,13 +91,13 @@ fn candidates_are_named_as_parsed() {
     }
     let d = default_candidates();
     assert_eq!(
-        (d[0].reuse, d[1].reuse, d[2].reuse),
-        (1, AUTO_REUSE, AUTO_REUSE)
+        d.iter().map(|c| c.reuse).collect::<Vec<_>>(),
+        [1, AUTO_REUSE, 1, AUTO_REUSE]
     );
     let guided = |c: &Candidate| c.strategy.directions == Directions::Guided;
     assert_eq!(
         d.iter().map(guided).collect::<Vec<_>>(),
-        [false, false, true]
+        [false, false, true, true]
     );
     assert!(d.iter().all(|c| c.roulette == Roulette::Classic));
 }
@@ -169,4 +169,15 @@ fn pilots_are_measured_against_one_denominator() {
         (shared / truth - 1.0).abs() < 5e-3,
         "{shared} against {truth}"
     );
+}
+
+#[test]
+fn a_guided_twin_differs_in_its_directions_alone() {
+    let twin = |s: &str| Candidate::parse(s).unwrap().guided().to_string();
+    assert_eq!(twin("mis"), "stratified+guided+mis");
+    assert_eq!(twin("mis+reuse4"), "stratified+guided+mis+reuse4");
+    assert_eq!(twin("mis+ears"), "stratified+guided+mis+ears");
+    assert_eq!(twin("stratified+guided+mis"), "stratified+guided+mis");
+    let d = default_candidates();
+    assert_eq!([d[0].guided(), d[1].guided()], [d[2], d[3]]);
 }
