@@ -549,8 +549,9 @@ fn pilot_staged(
 /// What became of the guided candidates of a list that stages them (the module doc).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum GuidedStage {
-    /// Not piloted: no unguided candidate beat the first, and too little of the first's light
-    /// was caustic (or the list does not stage its guided candidates).
+    /// None came in after the unguided pilots: no unguided candidate beat the first, and too
+    /// little of the first's light was caustic. (A list that does not stage its guided
+    /// candidates, one with no unguided candidate but the first, pilots them with the rest.)
     Shut,
     /// Piloted after the unguided ones, every guided candidate (its guide trained first on the
     /// pilots' strip): the unguided pilots' choice has no guided twin in the list.
