@@ -465,24 +465,28 @@ fn edge_map(
 /// Whether a guided render of `settings` under `plan` that trains its own guide keeps its
 /// training iterations in the image ([`PassPlan::discard_training`]).
 fn keeps_training(settings: &RenderSettings, plan: &PassPlan) -> bool {
-    gates(settings, plan) && !plan.discard_training && settings.reuse <= 1
+    trains_alone(settings, plan) && !plan.discard_training && settings.reuse <= 1
 }
 
 /// Whether a guided render of `settings` under `plan` that trains its own guide tests it with
-/// its [`gate`] while it trains: over the whole image (no strip, no shard: every shard of a
-/// render decides alike), one replicate, uniform passes, unless [`PassPlan::ungated`]. With
-/// path reuse too (its training iterations are rendered without reuse, as their paths record
-/// their own bounces, and so are the probes: the gate compares the guide against Phong
+/// its [`gate`] while it trains, unless [`PassPlan::ungated`]: over the whole image (no strip).
+/// With path reuse too (its training iterations are rendered without reuse, as their paths
+/// record their own bounces, and so are the probes: the gate compares the guide against Phong
 /// directions as a render without reuse would; it is the same verdict as with reuse on the
 /// shipped scenes, `docs/guiding.md`), and where the training images are discarded: its
 /// probes are then discarded too.
 fn gates(settings: &RenderSettings, plan: &PassPlan) -> bool {
+    trains_alone(settings, plan) && !plan.ungated && plan.strip.is_none()
+}
+
+/// Whether a render of `settings` under `plan` trains its own guide as one image: guided, no
+/// guide handed to it, one replicate, no shard (every shard of a render decides alike),
+/// uniform passes.
+fn trains_alone(settings: &RenderSettings, plan: &PassPlan) -> bool {
     settings.strategy.directions == Directions::Guided
         && plan.guide.is_none()
-        && !plan.ungated
         && settings.replicates == 1
         && plan.shard.is_none()
-        && plan.strip.is_none()
         && !plan.adaptive
 }
 

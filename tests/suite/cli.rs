@@ -648,6 +648,11 @@ fn guided_renders_report_their_training_and_guide_shows_it() {
     assert!(err.contains(&format!("guiding: gate {record}")), "{err}");
     let (err, record) = gated(&["--guide-gate", "off"]);
     assert!(record.is_none() && !err.contains("guiding: gate"), "{err}");
+    // ungated, the training images are kept all the same
+    assert!(
+        err.contains("guiding: the image combines the final iteration with "),
+        "{err}"
+    );
 
     let png = dir.path().join("guide.png");
     let args = |extra: &[&str]| {
