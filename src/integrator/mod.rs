@@ -274,7 +274,7 @@ pub fn radiance_split<'a, S: Sampler>(
     rays: &mut RayCounts,
     stack: &mut TraceStack,
     guide: Option<&'a Guide>,
-    split: &mut Split<'a>,
+    split: &mut Split,
 ) {
     Path::new(scene, settings, guide).trace(ray, sampler, rays, stack, None, Some(split));
 }
@@ -336,7 +336,7 @@ impl<'a> Path<'a> {
         rays: &mut RayCounts,
         stack: &mut TraceStack,
         mut rec: Option<&mut dyn PathRecorder>,
-        mut split: Option<&mut Split<'a>>,
+        mut split: Option<&mut Split>,
     ) -> Vec3 {
         let (scene, settings) = (self.scene, self.settings);
         let mut st = PathState {
@@ -446,7 +446,7 @@ impl<'a> Path<'a> {
         rays: &mut RayCounts,
         stack: &mut TraceStack,
         rec: Option<&mut (dyn PathRecorder + 'r)>,
-        mut split: Option<&mut Split<'a>>,
+        mut split: Option<&mut Split>,
         st: &mut PathState,
     ) -> Option<((Vec3, Vec3), Previous)> {
         let (scene, settings) = (self.scene, self.settings);
@@ -470,7 +470,7 @@ impl<'a> Path<'a> {
         rays.mark(Phase::Shade);
         if let Some(sp) = split.as_deref_mut().filter(|_| segment <= 2) {
             let arrival = (st.prev.map_or(0.0, |p| p.pdf), t, -wo);
-            st.reusing = sp.vertex(segment, &v, *bsdf, g, settings.directions, arrival);
+            st.reusing = sp.vertex(segment, &v, *bsdf, settings.directions, arrival);
             if st.reusing {
                 (sp.own, st.l) = (st.l, Vec3::ZERO);
             }
