@@ -22,6 +22,7 @@ import re
 import statistics
 import subprocess
 import sys
+import time
 import tempfile
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
@@ -564,6 +565,45 @@ def auto():
     geo = math.exp(statistics.mean(math.log(x) for x in vs_mis))
     print(f"\nGeometric mean of mis / auto: {geo:.2f}×; worst best / auto: {min(vs_best):.2f}× "
           f"({AUTO_SCENES[vs_best.index(min(vs_best))]}).")
+
+
+@section("auto-default")
+def auto_default():
+    """`--strategy auto` against the default (`mis`) at each scene's own render (its
+    `scene.toml`'s size and spp, no time limit): efficiency 1/(relMSE × wall time), relMSE from
+    seed pairs, time the whole process's (pilots, loading and writing included)."""
+    print("`vrpt render scenes/SCENE --seed S [--strategy auto]` (each scene's own size and spp), seed "
+          "pairs (1, 2), (3, 4) and (5, 6), the two interleaved; relMSE of one render from its pair "
+          "(`vrpt diff --pair-denominator`, the denominator `equal_time_pairs`' one), time the process's "
+          "wall clock; ratio = (relMSE × time) of mis over auto's, above 1 means auto wins:\n")
+    rows, ratios = [], []
+    for scene in AUTO_SCENES:
+        denominator = pair_denominator(scene, None, None, 10)
+        got = {}
+        for pair in ((1, 2), (3, 4), (5, 6)):
+            for label, flags in (("mis", []), ("auto", ["--strategy", "auto"])):
+                imgs, rels, times, picks = [], *got.get(label, ([], [], []))
+                for seed in pair:
+                    img = WORK / f"default-{seed}.{label}.exr"
+                    t0 = time.monotonic()
+                    r = vrpt("render", f"scenes/{scene}", "--seed", seed, "--stats", *flags, "-o", img)
+                    times.append(time.monotonic() - t0)
+                    imgs.append(img)
+                    m = re.search(r"^  (\S+)\s.*<- chosen(, with guided directions)?", r.stderr, re.M)
+                    if m:
+                        picks.append(m.group(1) + (" (its guided twin)" if m.group(2) else ""))
+                d = vrpt("diff", imgs[0], imgs[1], "--pair-denominator", denominator).stdout
+                rels.append(float(re.search(r"^relMSE of one \(pair\)\s+(\S+)", d, re.M).group(1)))
+                got[label] = (rels, times, picks)
+        (rm, tm, _), (ra, ta, picks) = ((statistics.mean(a), statistics.mean(b), c)
+                                        for a, b, c in (got["mis"], got["auto"]))
+        ratios.append(rm * tm / (ra * ta))
+        chosen = ", ".join(f"{picks.count(c)}× {c}" for c in sorted(set(picks)))
+        rows.append([scene, f"{g(rm)}, {tm:.2f} s", f"{g(ra)}, {ta:.2f} s", chosen, f"{ratios[-1]:.2f}×"])
+        print(f"  {scene}: {rows[-1]}", file=sys.stderr, flush=True)
+    print(table(["scene", "mis relMSE, time", "auto relMSE, time", "auto chose", "auto / mis efficiency"], rows))
+    geo = math.exp(statistics.mean(math.log(x) for x in ratios))
+    print(f"\nGeometric mean: {geo:.2f}×; worst: {min(ratios):.2f}× ({AUTO_SCENES[ratios.index(min(ratios))]}).")
 
 
 @section("adaptive")
