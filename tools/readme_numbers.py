@@ -385,6 +385,20 @@ def pair_denominator(scene, w, h, seconds):
                          "--time-limit", 2 * seconds, "--seed", 7777)
 
 
+def pair_rel_mse(a, b, denominator):
+    """The relMSE of one render estimated from two independent renders `a`, `b` of it against the
+    shared `denominator` image (`vrpt diff --pair-denominator`)."""
+    d = vrpt("diff", a, b, "--pair-denominator", denominator).stdout
+    return float(re.search(r"^relMSE of one \(pair\)\s+(\S+)", d, re.M).group(1))
+
+
+def auto_pick(stderr):
+    """The candidate `--strategy auto --stats` chose, as its table names it ("(its guided twin)"
+    after it where the twin rendered), or None."""
+    m = re.search(r"^  (\S+)\s.*<- chosen(, with guided directions)?", stderr, re.M)
+    return m and m.group(1) + (" (its guided twin)" if m.group(2) else "")
+
+
 def equal_time_pairs(scene, w, h, seconds, configs, pairs=((1, 2), (3, 4)), log=None):
     """{label: (relMSE, final spp, last stderr)} measured without a converged reference: each
     config rendered with `--time-limit` for two seeds of each pair (configs interleaved), and the
@@ -411,8 +425,7 @@ def equal_time_pairs(scene, w, h, seconds, configs, pairs=((1, 2), (3, 4)), log=
                 err = r.stderr
                 if log is not None:
                     log.append((label, r.stderr))
-            d = vrpt("diff", imgs[0], imgs[1], "--pair-denominator", denominator).stdout
-            rel = float(re.search(r"^relMSE of one \(pair\)\s+(\S+)", d, re.M).group(1))
+            rel = pair_rel_mse(imgs[0], imgs[1], denominator)
             m, n, _ = got[label]
             got[label] = (m + [rel], n + spps, err)
     return {l: (statistics.mean(m), statistics.median(n), e) for l, (m, n, e) in got.items()}
@@ -548,9 +561,7 @@ def auto():
     for scene in AUTO_SCENES:
         log = []
         r = equal_time_pairs(scene, None, None, 10, configs, pairs=((1, 2), (3, 4), (5, 6)), log=log)
-        picks_of = [re.search(r"^  (\S+)\s.*<- chosen(, with guided directions)?", e, re.M)
-                    for l, e in log if l == "auto"]
-        chosen = [m.group(1) + (" (its guided twin)" if m.group(2) else "") for m in picks_of]
+        chosen = [auto_pick(e) for l, e in log if l == "auto"]
         mm, mr, mg, mgr = (r[k][0] for k in ("mis", "reuse", "guided", "guided+reuse"))
         ma, sa, _ = r["auto"]
         best = min(mm, mr, mg, mgr)
@@ -589,11 +600,9 @@ def auto_default():
                     r = vrpt("render", f"scenes/{scene}", "--seed", seed, "--stats", *flags, "-o", img)
                     times.append(time.monotonic() - t0)
                     imgs.append(img)
-                    m = re.search(r"^  (\S+)\s.*<- chosen(, with guided directions)?", r.stderr, re.M)
-                    if m:
-                        picks.append(m.group(1) + (" (its guided twin)" if m.group(2) else ""))
-                d = vrpt("diff", imgs[0], imgs[1], "--pair-denominator", denominator).stdout
-                rels.append(float(re.search(r"^relMSE of one \(pair\)\s+(\S+)", d, re.M).group(1)))
+                    if label == "auto":
+                        picks.append(auto_pick(r.stderr))
+                rels.append(pair_rel_mse(imgs[0], imgs[1], denominator))
                 got[label] = (rels, times, picks)
         (rm, tm, _), (ra, ta, picks) = ((statistics.mean(a), statistics.mean(b), c)
                                         for a, b, c in (got["mis"], got["auto"]))
