@@ -28,17 +28,18 @@
 //! images share, a glossy highlight noisy in both, cancels, where unpaired errors read the
 //! plates' 1.8× at z 1.6–4 and paired at 8–61. The gate closes where two readings in a row
 //! have `z >` [`GATE_Z`] (a guide still learning loses its first readings: see
-//! [`GATE_PATHS`]) or one has `z >` [`GATE_Z_ALONE`], opens for good where one has `z < −GATE_Z`, and stays open after
-//! [`GATE_PROBES`] undecided readings (the render was asked to guide). A closed gate ends the
-//! training, and the final iteration samples with Phong directions.
+//! [`GATE_PATHS`]) or one has `z >` [`GATE_Z_ALONE`], opens for good where one has
+//! `z < −GATE_Z`, and stays open after [`GATE_PROBES`] undecided readings (the render was asked
+//! to guide). A closed gate ends the training, and the final iteration samples with Phong
+//! directions.
 //!
 //! **What the image keeps.** Every probe is an unbiased image of the pixel. Where the gate
 //! closes, the probes are kept with the training iterations and combined with the final
 //! iteration by inverse variance (`render::combine`): they are the final iteration's estimator.
 //! Where it stays open they are dropped: Phong images where the guide wins have heavier tails
 //! than the guided ones, their variances read low at a few samples per pixel, and kept they
-//! cost the gap 1.46× in relMSE at 10 s. The decision is a function of all the training's and probes' pixels, as the guide itself
-//! is; the combination weighs a pixel by the other half of the image's variances, and the
+//! cost the gap 1.46× in relMSE at 10 s. The decision is a function of all the training's and
+//! probes' pixels, as the guide itself is; the combination weighs a pixel by the other half of the image's variances, and the
 //! decision's dependence on one pixel's samples is of the same second order as the guide's.
 
 use super::auto::GUIDED_RAY_COST;

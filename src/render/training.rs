@@ -247,10 +247,10 @@ impl<'a, F: SamplerFactory> Trainer<'a, F> {
         self.settings.width as u64 * self.settings.height as u64
     }
 
-    /// The gate's probe of training iteration `k` ([`super::gate`]): `2^k` spp with the guide
-    /// off and without path reuse (as the training iterations render), on seeds of its own (`mix64` of the iteration's seed input with a constant of its
-    /// own); its image and the rays it traced (added to `stats` with its thread time), or
-    /// `None` where the stop flag cut it.
+    /// The gate's probe of training iteration `k` ([`super::gate`]): `2^k` spp with the guide off
+    /// and without path reuse (as the training iterations render), on seeds of its own (`mix64` of
+    /// the iteration's seed input with a constant of its own); its image and the rays it traced
+    /// (added to `stats` with its thread time), or `None` where the stop flag cut it.
     fn probe(&self, k: u32, stats: &mut RenderStats) -> Option<(IterationImage, u64)> {
         let settings = self.settings;
         let spp = 1u64 << k;

@@ -35,8 +35,8 @@
 //! evaluations, no surface to shade; see the constant for the measurement) and each ray of an
 //! EARS candidate weighed [`EARS_RAY_COST`] (its cache lookups and recursion). A count is the same
 //! for every thread count, so the choice, and the image, are too; a guided candidate's rays
-//! weigh [`GUIDED_RAY_COST`] (the guide's lookups and descents). Under a time limit the pilots' wall time is noisy (a tenth
-//! of a second on a strip, on a shared machine: textured's reuse pilot once took 1.14× the mis
+//! weigh [`GUIDED_RAY_COST`] (the guide's lookups and descents). Under a time limit the pilots'
+//! wall time is noisy (a tenth of a second on a strip, on a shared machine: textured's reuse pilot once took 1.14× the mis
 //! pilot's time, and 1.5–1.9× in three other renders, which switched the choice there), but
 //! rays miss what a ray costs in each scene: counted in rays at 10 s the door's pilots read
 //! reuse 1.06× as efficient (z 2.2–2.4), by time 1.14–1.24× (z 5–9; it wins 4× there), and
