@@ -452,6 +452,7 @@ impl RenderRequest {
             target_error: self.error.target_error,
             strip: None,
             guide: None,
+            edges: None,
             discard_training: self.training_images.as_deref() == Some("discard"),
             ungated: self.guide_gate.as_deref() == Some("off"),
         })

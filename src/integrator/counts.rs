@@ -1,5 +1,6 @@
-//! What a render counts of its rays, of the light its paths carried (all of it, and the part
-//! that came through a delta vertex after a Phong one: [`RayCounts::caustic_share`]) and, under
+//! What a render counts of its rays, of the light its paths carried (all of it, the part that
+//! came through a delta vertex after a Phong one: [`RayCounts::caustic_share`], and the part
+//! found from the second vertex on: [`RayCounts::indirect_share`]) and, under
 //! `--stats`, of its time: [`RayCounts`] by kind, one traversal in [`TIMED_RAY_EVERY`] timed, and one path sample in [`TIMED_PATH_EVERY`]
 //! timed phase by phase ([`Phase`]), the clock's own cost measured by [`clock_overhead_ns`].
 
@@ -63,6 +64,12 @@ pub struct RayCounts {
     /// mirror or glass) after a Phong vertex: a caustic, light no light sample can reach and only
     /// a bounce from the Phong vertex before it finds, which is what a guide learns to aim.
     pub caustic: f64,
+    /// The part of [`RayCounts::light`] a path found from its second vertex on: the second
+    /// vertex's light sample and everything after its bounce (not the emission the first
+    /// bounce hit there, which is the first vertex's direct light under MIS). It is the light
+    /// path reuse shares between pixels ([`super::reuse`]: a reused tail is a second vertex);
+    /// a reusing path counts its tail's part of the light alone.
+    pub indirect: f64,
     /// Nanoseconds spent in the timed traversals, when [`super::IntegratorSettings::time_traces`]
     /// is on.
     pub trace_ns: u64,
@@ -95,6 +102,15 @@ impl RayCounts {
         }
     }
 
+    /// The share of the light the paths carried that was indirect ([`RayCounts::indirect`]); 0
+    /// where they carried none.
+    pub fn indirect_share(&self) -> f64 {
+        match self.light > 0.0 {
+            true => (self.indirect / self.light).clamp(0.0, 1.0),
+            false => 0.0,
+        }
+    }
+
     /// Add `o`'s counts.
     pub fn add(&mut self, o: &RayCounts) {
         self.camera += o.camera;
@@ -104,6 +120,7 @@ impl RayCounts {
         self.edge += o.edge;
         self.light += o.light;
         self.caustic += o.caustic;
+        self.indirect += o.indirect;
         self.trace_ns += o.trace_ns;
         self.timed += o.timed;
         for k in 0..PHASES {

@@ -349,6 +349,8 @@ impl<'a> Path<'a> {
         // whether a Phong vertex came before: emission then reached through a delta lobe is a
         // caustic ([`RayCounts::caustic`])
         let mut phong_before = false;
+        // the light found up to the second vertex's emission ([`RayCounts::indirect`])
+        let mut direct = None;
         for segment in 1..=settings.max_depth {
             let caustic = phong_before && st.prev.is_some_and(|p| p.delta);
             let (at, found) = match self.reach(st.prev, (origin, dir), rays, stack) {
@@ -359,6 +361,9 @@ impl<'a> Path<'a> {
             st.l += found;
             if caustic {
                 rays.caustic += luminance(found) as f64;
+            }
+            if segment == 2 {
+                direct = Some(st.l);
             }
             let Some((t, s, wo, front)) = at else { break };
             if segment == settings.max_depth {
@@ -388,6 +393,11 @@ impl<'a> Path<'a> {
             ((origin, dir), st.prev) = (ray, Some(p));
         }
         rays.light += luminance(st.l) as f64;
+        rays.indirect += match (st.reusing, direct) {
+            (true, _) => luminance(st.l),
+            (false, Some(d)) => luminance(st.l - d).max(0.0),
+            (false, None) => 0.0,
+        } as f64;
         if let Some(rec) = rec {
             rec.finish(st.l);
         }

@@ -89,7 +89,10 @@ pub const SKY_STEP: f32 = 10.0;
 
 /// Which of an image's pixels see an edge of emission, and how many edge rays a sample spends
 /// in each (see the module doc).
-pub(super) struct EdgeMap {
+#[derive(Debug, PartialEq)]
+pub struct EdgeMap {
+    /// The image's size and the allocation the map was found for ([`EdgeMap::fits`]).
+    made_for: (UVec2, Allocation),
     width: u32,
     /// Edge rays a sample in each pixel (0: not an edge pixel), row-major.
     rays_at: Vec<u16>,
@@ -102,7 +105,7 @@ pub(super) struct EdgeMap {
 /// What the allocation of edge rays is computed from (see the module doc): the render's seed
 /// (the pilot's points are keyed by it, apart from every sample's), its integrator (the
 /// pilot's paths, their directions unguided) and the most edge rays a sample spends.
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) struct Allocation {
     pub(super) seed: u64,
     pub(super) integrator: IntegratorSettings,
@@ -138,6 +141,7 @@ impl EdgeMap {
             })
             .collect();
         let mut map = EdgeMap {
+            made_for: (image, alloc),
             width: image.x,
             rays_at: vec![0; (image.x * image.y) as usize],
             count: 0,
@@ -166,6 +170,12 @@ impl EdgeMap {
             }
         }
         map
+    }
+
+    /// Whether this is the map of an `image`-sized image that `alloc` finds: the same bits as
+    /// [`EdgeMap::new`] would give.
+    pub(super) fn fits(&self, image: UVec2, alloc: Allocation) -> bool {
+        self.made_for == (image, alloc)
     }
 
     /// The edge rays a sample spends in the image's pixel `p` (0: not an edge pixel).

@@ -260,10 +260,18 @@ impl RenderStats {
             ),
             false => String::new(),
         };
+        // the light found from the second vertex on (what path reuse shares)
+        let indirect = match self.rays.light > 0.0 {
+            true => format!(
+                "; {:.1}% of the light indirect",
+                100.0 * self.rays.indirect_share()
+            ),
+            false => String::new(),
+        };
         format!(
             "{}: {} triangles, BVH built in {:.1} ms ({:.1} KiB){textures}\n\
              rendered {}x{} at {} spp ({}{reuse}, max depth {}) in {:.3} s: {:.3} M samples/s, {:.2} Mrays/s\n\
-             rays: {} ({} camera{edges}, {} bounce, {} shadow{connections}; {:.2} per sample{caustic})\n",
+             rays: {} ({} camera{edges}, {} bounce, {} shadow{connections}; {:.2} per sample{caustic}{indirect})\n",
             scene.source.display(),
             scene.triangle_count(),
             scene.accel.build_time.as_secs_f64() * 1e3,

@@ -61,6 +61,20 @@
 //! not `--directions guided`'s (whose guide trains on the whole image), but unbiased for the
 //! same reason: the guide and the choice come from samples independent of the image's.
 //!
+//! The image's edge map ([`super::edges`]: which pixels see an edge of a light, and their edge
+//! rays) is found once, with the render's seed and the first candidate's integrator, before
+//! the pilots: every pilot renders with it, and the render chosen does too where it is the
+//! map that render would find itself (the same bits: `EdgeMap::fits`). It depends on
+//! neither the pilots' samples nor the render's, so the choice and the image stay unbiased;
+//! found by each pilot and again by the render, it took ~10 ms of a 0.1-s render apiece.
+//!
+//! Path reuse shares the paths' second vertices between the pixels of a block, so it lowers
+//! the variance of the light found from the second vertex on and of nothing else
+//! ([`crate::integrator::RayCounts::indirect`]). Where less than [`INDIRECT_GATE`] of the first
+//! candidate's pilot's light was indirect, no candidate with path reuse is piloted (the first
+//! pilot is the only one then, unless the list names others): on the scenes lit directly such a
+//! pilot, 3–4× a mis pilot's cost, was most of what auto paid for its choice of mis.
+//!
 //! Guided candidates (but a guided first one) are staged ([`GuidedStage`]): the unguided
 //! candidates are piloted first, and the guided ones come in only where an unguided candidate
 //! other than the first beat it beyond the noise, where at least [`CAUSTIC_GATE`] of the first
@@ -105,6 +119,7 @@
 //! own training, shorter than a render's, and is not a default candidate either (where it wins,
 //! `mis+reuse4` wins more: `docs/roulette.md`).
 
+use super::edges::EdgeMap;
 use super::{LearnedGuide, PassPlan, RenderSettings, TileStrip, TrainingBudget};
 use crate::bsdf::Directions;
 use crate::error::Result;
@@ -117,6 +132,20 @@ use std::time::{Duration, Instant};
 
 /// Replicates of every pilot.
 pub const PILOT_REPLICATES: u32 = 4;
+
+/// The share of the first candidate's pilot's light found from the second vertex on
+/// ([`crate::integrator::RayCounts::indirect_share`]) below which no candidate with path reuse
+/// is piloted (the module doc). Path reuse shares the paths' second vertices between pixels,
+/// so it can lower only the variance of the light found from there on; where that light is a
+/// small part of the image, its pilot (the dearest: 3–4× a mis pilot's time) buys nothing.
+/// Measured with `vrpt render SCENE --spp 16 --stats` (the share is printed with the rays): the
+/// five scenes lit directly 0–7% (checker-plane and lit-checker 0, the glossy plates 0.3%,
+/// sun-sky 4.7%, textured 7.2%), where path reuse gains at most 1.07× over mis at 10 s and
+/// loses up to 2×; the others 26–100% (the Cornell box 26%, glass 34%, the night hall 46%, the
+/// gap 81%, door-dark 87%, the door 89%, the lamp 100%), where it gains 2.7–4× (but on glass
+/// and the lamp, whose caustics it does not reach). 15% is twice the highest of the first and
+/// half the lowest of the second.
+pub const INDIRECT_GATE: f64 = 0.15;
 
 /// The share of the budget's spp each candidate's pilot takes: 1/16 (on its strip of tiles, so
 /// 1/64 of the render's cost where the strip is a quarter of the image).
@@ -359,6 +388,9 @@ pub struct Choice {
     /// The share of the first candidate's pilot's light that was caustic
     /// ([`crate::integrator::RayCounts::caustic_share`]; see [`CAUSTIC_GATE`]).
     pub caustic: f64,
+    /// The share of the first candidate's pilot's light found from the second vertex on
+    /// ([`crate::integrator::RayCounts::indirect_share`]; see [`INDIRECT_GATE`]).
+    pub indirect: f64,
     /// Wall time of all the pilots.
     pub elapsed: Duration,
     /// The tiles the pilots rendered, and the image's (partial ones included).
@@ -366,6 +398,9 @@ pub struct Choice {
     /// The guide the chosen candidate's pilot learned, when its directions are guided: the
     /// render samples with it ([`PassPlan::guide`]).
     pub guide: Option<Arc<LearnedGuide>>,
+    /// The image's edge map the pilots rendered with, when it is the one the chosen
+    /// candidate's render would find itself ([`PassPlan::edges`]).
+    pub edges: Option<Arc<EdgeMap>>,
 }
 
 /// The share of the first candidate's pilot's light that came as caustics (through a mirror or
@@ -466,7 +501,7 @@ pub fn choose(
         Some(_) => Cost::Seconds,
         None => Cost::Rays,
     };
-    let mut pilots = Pilots::new(scene, settings, plan, candidates, cost);
+    let mut pilots = Pilots::new(scene, settings, plan, candidates, cost)?;
     let spp = match plan.time_limit {
         None => pilot_spp(settings.spp),
         Some(limit) => {
@@ -484,12 +519,12 @@ pub fn choose(
     };
     let (ks, done, stage) = pilot_staged(&mut pilots, candidates, spp)?;
     let caustic = done.first().map_or(0.0, |p| p.caustic);
+    let indirect = done.first().map_or(0.0, |p| p.indirect);
     let rows = shared_denominator(pilots.width, &done);
     let (index, z) = decide(&rows);
-    let candidate = match stage {
-        GuidedStage::Rendered => rows[index].candidate.guided(),
-        _ => rows[index].candidate,
-    };
+    let candidate = candidate_of(&rows, index, stage);
+    let chosen = candidate.settings(settings);
+    let edges = (pilots.edges.clone()).filter(|m| super::edges_fit(m, &chosen, plan));
     Ok(Choice {
         candidate,
         index,
@@ -502,17 +537,29 @@ pub fn choose(
         cost,
         z,
         caustic,
+        indirect,
         elapsed: start.elapsed(),
         tiles: pilots.tiles,
         guide: pilots.guides[ks[index]].take(),
+        edges,
     })
+}
+
+/// The candidate chosen by row `index` of `rows` where the guided candidates ended in `stage`
+/// (with [`GuidedStage::Rendered`], the row's guided twin).
+fn candidate_of(rows: &[PilotRow], index: usize, stage: GuidedStage) -> Candidate {
+    match stage {
+        GuidedStage::Rendered => rows[index].candidate.guided(),
+        _ => rows[index].candidate,
+    }
 }
 
 /// The pilots of `candidates` at `spp`, staged (the module doc): the first; where its light is
 /// caustic enough and its guided twin is listed, no more (the twin renders); else the other
 /// unguided ones, and where one of them beat the first or the light is caustic, no more where
-/// the guided twin of their choice is listed (it renders), else every guided candidate. The
-/// candidates piloted, their pilots and what became of the guided ones.
+/// the guided twin of their choice is listed (it renders), else every guided candidate. Where
+/// too little of the first's light is indirect ([`INDIRECT_GATE`]), no candidate with path
+/// reuse is piloted. The candidates piloted, their pilots and what became of the guided ones.
 fn pilot_staged(
     pilots: &mut Pilots,
     candidates: &[Candidate],
@@ -528,7 +575,9 @@ fn pilot_staged(
     if staged && caustic && twin_of(candidates[0]).is_some() {
         return Ok((ks, done, GuidedStage::Rendered));
     }
-    for k in (1..n).filter(|&k| !staged || !guided(k)) {
+    let direct = done[0].indirect < INDIRECT_GATE;
+    let shares = |k: &usize| !(direct && candidates[*k].reuse > 1);
+    for k in (1..n).filter(|&k| !staged || !guided(k)).filter(shares) {
         done.push(pilots.run(k, spp)?);
         ks.push(k);
     }
@@ -539,7 +588,7 @@ fn pilot_staged(
     if twin_of(winner).is_some() {
         return Ok((ks, done, GuidedStage::Rendered));
     }
-    for k in (1..n).filter(|&k| guided(k)) {
+    for k in (1..n).filter(|&k| guided(k)).filter(shares) {
         done.push(pilots.run(k, spp)?);
         ks.push(k);
     }
@@ -577,6 +626,7 @@ impl Choice {
         PassPlan {
             time_limit: (plan.time_limit).map(|t| t.saturating_sub(self.elapsed)),
             guide: self.guide.clone(),
+            edges: self.edges.clone(),
             ..plan.clone()
         }
     }

@@ -25,6 +25,10 @@ pub(super) struct Pilots<'a> {
     /// Each guided candidate's guide, learned on the strip before its first pilot (see
     /// [`GUIDE_SHARE`]), kept for the render if it is chosen.
     pub(super) guides: Vec<Option<Arc<LearnedGuide>>>,
+    /// The image's edge map, found once with the render's seed and the first candidate's
+    /// integrator, every pilot's (independent of every pilot's and the render's samples, so
+    /// the choice and the image stay unbiased), and the render's where it fits it.
+    pub(super) edges: Option<Arc<EdgeMap>>,
 }
 
 impl<'a> Pilots<'a> {
@@ -36,7 +40,15 @@ impl<'a> Pilots<'a> {
         plan: &'a PassPlan,
         candidates: &'a [Candidate],
         cost: Cost,
-    ) -> Self {
+    ) -> Result<Self> {
+        let first = candidates.first().map(|c| c.settings(settings));
+        let edges = match &first {
+            Some(s) => {
+                let camera = crate::render::strip_camera(scene, s, plan)?;
+                crate::render::edge_map(scene, &camera, s, plan).map(Arc::new)
+            }
+            None => None,
+        };
         let strip = pilot_strip(settings.width, settings.height).map(Arc::new);
         let (width, height) = strip
             .as_ref()
@@ -47,7 +59,7 @@ impl<'a> Pilots<'a> {
             .map_or(image_tiles, |s| s.origins.len() as u32);
         let share =
             (width as f64 * height as f64) / (settings.width as f64 * settings.height as f64);
-        Pilots {
+        Ok(Pilots {
             scene,
             settings,
             plan,
@@ -59,7 +71,8 @@ impl<'a> Pilots<'a> {
             share,
             tiles: (tiles, image_tiles),
             guides: vec![None; candidates.len()],
-        }
+            edges,
+        })
     }
 
     /// The pilot of candidate `k` at `spp` samples per pixel (all replicates).
@@ -76,6 +89,7 @@ impl<'a> Pilots<'a> {
         let mut p = PassPlan {
             stop: self.plan.stop.clone(),
             strip: self.strip.clone(),
+            edges: self.edges.clone(),
             ..PassPlan::default()
         };
         if s.strategy.directions == Directions::Guided {
@@ -116,6 +130,9 @@ pub(super) struct Pilot {
     pub(super) variance: Vec<glam::Vec3>,
     /// The share of its paths' light that was caustic ([`crate::integrator::RayCounts::caustic_share`]).
     pub(super) caustic: f64,
+    /// The share of its paths' light found from the second vertex on
+    /// ([`crate::integrator::RayCounts::indirect_share`]).
+    pub(super) indirect: f64,
 }
 
 /// The pilots' rows, every relMSE measured against one denominator ([`rel_mse_against`]): the
@@ -202,5 +219,6 @@ fn pilot_of(candidate: Candidate, r: Rendered, cost: Cost) -> Pilot {
         mean: r.film.mean_image(),
         variance: r.estimate.variance,
         caustic: rays.caustic_share(),
+        indirect: rays.indirect_share(),
     }
 }

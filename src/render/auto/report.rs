@@ -20,12 +20,13 @@ impl Choice {
             .unwrap_or(8)
             .max(8);
         let mut s = format!(
-            "auto: pilots of {} spp ({} replicates) on {} of {} tiles in {:.2} s\n  {:w$}  {:>10}  {:>9}  {:>9}  {:>10}\n",
+            "auto: pilots of {} spp ({} replicates) on {} of {} tiles in {:.2} s ({:.0}% of the first's light indirect)\n  {:w$}  {:>10}  {:>9}  {:>9}  {:>10}\n",
             self.rows.first().map_or(0, |r| r.spp),
             PILOT_REPLICATES,
             self.tiles.0,
             self.tiles.1,
             self.elapsed.as_secs_f64(),
+            100.0 * self.indirect,
             "strategy",
             "relMSE",
             "± se",
@@ -73,8 +74,17 @@ impl Choice {
         } else if self.stage == GuidedStage::Piloted && self.caustic >= CAUSTIC_GATE {
             s += &format!("  guided candidates piloted: {caustic}\n");
         }
-        if !self.unpiloted.is_empty() {
-            s += &format!("  {}: not piloted ({unpiloted})\n", self.unpiloted_names());
+        let (unshared, others) = self.unpiloted_by_reason();
+        if !unshared.is_empty() {
+            s += &format!(
+                "  {unshared}: not piloted ({:.0}% of {first}'s light indirect, gate {:.0}%: path \
+                 reuse shares only that)\n",
+                100.0 * self.indirect,
+                100.0 * INDIRECT_GATE
+            );
+        }
+        if !others.is_empty() {
+            s += &format!("  {others}: not piloted ({unpiloted})\n");
         }
         s + &format!(
             "  efficiency relative to {first}; the best against it: z = {:.1} (switch above {SWITCH_Z}){}\n",
@@ -83,12 +93,25 @@ impl Choice {
         )
     }
 
-    /// The guided candidates not piloted, comma-separated.
+    /// The candidates not piloted, comma-separated.
     fn unpiloted_names(&self) -> String {
         (self.unpiloted.iter())
             .map(|c| c.to_string())
             .collect::<Vec<_>>()
             .join(", ")
+    }
+
+    /// The candidates not piloted, comma-separated, in two lists: those with path reuse where
+    /// too little of the light was indirect ([`INDIRECT_GATE`]), and the others (guided ones
+    /// the stage left out: [`GuidedStage`]).
+    fn unpiloted_by_reason(&self) -> (String, String) {
+        let direct = self.indirect < INDIRECT_GATE;
+        let (unshared, others): (Vec<_>, Vec<_>) = (self.unpiloted.iter())
+            .map(|c| (c.reuse > 1 && direct, c.to_string()))
+            .partition(|(u, _)| *u);
+        let names =
+            |v: Vec<(bool, String)>| v.into_iter().map(|(_, n)| n).collect::<Vec<_>>().join(", ");
+        (names(unshared), names(others))
     }
 
     /// What the table's rays weigh, when they are not all one: a reuse connection's shadow ray,
@@ -125,11 +148,12 @@ impl Choice {
             _ => "",
         };
         format!(
-            "chose {}{rendered}; efficiency {}{unpiloted}; z {:.2}; caustic {:.3}; pilots {} spp on {} of {} tiles, cost {}",
+            "chose {}{rendered}; efficiency {}{unpiloted}; z {:.2}; caustic {:.3}; indirect {:.3}; pilots {} spp on {} of {} tiles, cost {}",
             self.candidate,
             rows.join(", "),
             self.z,
             self.caustic,
+            self.indirect,
             self.rows.first().map_or(0, |r| r.spp),
             self.tiles.0,
             self.tiles.1,

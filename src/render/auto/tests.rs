@@ -132,6 +132,7 @@ fn pilot(mean: f32, variance: f32, pixels: usize, cost: f64) -> Pilot {
         mean: vec![glam::Vec3::splat(mean); pixels],
         variance: vec![glam::Vec3::splat(variance); pixels],
         caustic: 0.0,
+        indirect: 0.0,
     }
 }
 
