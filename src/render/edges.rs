@@ -52,7 +52,7 @@
 //! same on any number of threads), so each pixel's estimator stays unbiased whatever it gets.
 //! The pilot costs about 1/8 of a sample a pixel and 16 rays an edge pixel.
 
-use super::TILE;
+use super::{PassPlan, RenderSettings, RenderStats, TILE};
 use crate::accel::TraceStack;
 use crate::bsdf::Directions;
 use crate::camera::Camera;
@@ -64,6 +64,7 @@ use crate::scene::Scene;
 use glam::{UVec2, Vec2, Vec3};
 use rayon::prelude::*;
 use std::f64::consts::PI;
+use std::sync::Arc;
 
 /// The default `--edge-rays`, the most a sample spends in a pixel: the allocation (see the
 /// module doc) decides below it. Against 16 in every edge pixel (the default before), over the
@@ -86,6 +87,61 @@ pub const EDGE_CONTRAST: f32 = 0.25;
 /// own edges (on `scenes/sun-sky`, where the sky map meets its dark lower half, 226 pixels split
 /// at [`EDGE_CONTRAST`] alone cost 7–10% of the time and left the MSE where it was, 1.253e-4).
 pub const SKY_STEP: f32 = 10.0;
+
+/// The edge map of a render of `settings` under `plan` through `camera`: the plan's
+/// ([`super::PassPlan::edges`]), else the one [`edge_map`] finds; its rays and edge pixels
+/// counted in `stats`.
+pub(super) fn of_render(
+    scene: &Scene,
+    camera: &Camera,
+    (settings, plan): (&RenderSettings, &PassPlan),
+    stats: &mut RenderStats,
+) -> Option<Arc<EdgeMap>> {
+    let edges = match &plan.edges {
+        Some(m) => Some(m.clone()),
+        None => edge_map(scene, camera, settings, plan).map(Arc::new),
+    };
+    if let Some(e) = &edges {
+        stats.rays.add(&e.rays);
+        stats.edge_pixels = e.count;
+    }
+    edges
+}
+
+/// The edge pixels of a render of `settings` under `plan` through `camera` (the image's, where
+/// it renders a strip), and the edge rays a sample spends in each; `None` without them.
+pub(crate) fn edge_map(
+    scene: &Scene,
+    camera: &Camera,
+    settings: &RenderSettings,
+    plan: &PassPlan,
+) -> Option<EdgeMap> {
+    let (image, alloc) = edge_allocation(settings, plan)?;
+    Some(EdgeMap::new(scene, camera, image, alloc))
+}
+
+/// The image size and the allocation [`edge_map`] finds a render's map with; `None` without
+/// edge rays.
+fn edge_allocation(settings: &RenderSettings, plan: &PassPlan) -> Option<(UVec2, Allocation)> {
+    if settings.edge_rays == 0 {
+        return None;
+    }
+    let image = plan
+        .strip
+        .as_ref()
+        .map_or(UVec2::new(settings.width, settings.height), |s| s.image);
+    let alloc = Allocation {
+        seed: settings.seed,
+        integrator: settings.integrator(),
+        most: settings.edge_rays,
+    };
+    Some((image, alloc))
+}
+
+/// Whether `map` is the edge map a render of `settings` under `plan` would find itself.
+pub(crate) fn edges_fit(map: &EdgeMap, settings: &RenderSettings, plan: &PassPlan) -> bool {
+    edge_allocation(settings, plan).is_some_and(|(image, alloc)| map.fits(image, alloc))
+}
 
 /// Which of an image's pixels see an edge of emission, and how many edge rays a sample spends
 /// in each (see the module doc).

@@ -229,9 +229,9 @@ pub struct PassPlan {
     /// door, 1.00× on door-dark and 0.76× on the gap of the image without them).
     pub discard_training: bool,
     /// The image's edge pixels and their edge rays, found before the render, or `None`: the
-    /// render finds them (`edge_map`). `--strategy auto` finds them once, with the render's
+    /// render finds them (`edges::edge_map`). `--strategy auto` finds them once, with the render's
     /// seed and its first candidate's integrator, for its pilots, and hands them to the render
-    /// it chooses where they are the map that render would find itself (`edges_fit`).
+    /// it chooses where they are the map that render would find itself (`edges::edges_fit`).
     pub edges: Option<Arc<edges::EdgeMap>>,
     /// A guided render that trains its own guide over the whole image probes the guide against
     /// Phong directions during its training and renders the rest without it where it loses
@@ -375,15 +375,7 @@ pub fn render_passes_with<F: SamplerFactory>(
     let start = Instant::now();
     with_threads(settings.threads, || {
         let mut stats = RenderStats::default();
-        let found = plan
-            .edges
-            .is_none()
-            .then(|| edge_map(scene, &camera, settings, plan));
-        let edges = found.flatten().map(Arc::new).or_else(|| plan.edges.clone());
-        if let Some(e) = &edges {
-            stats.rays.add(&e.rays);
-            stats.edge_pixels = e.count;
-        }
+        let edges = edges::of_render(scene, &camera, (settings, plan), &mut stats);
         let edges = edges.as_deref();
         let guided = settings.strategy.directions == Directions::Guided;
         let learned = plan.guide.as_deref().filter(|_| guided);
@@ -446,44 +438,6 @@ pub fn render_passes_with<F: SamplerFactory>(
             .map(|s| s.first_vertex_map(scene, &camera, (settings.width, settings.height)));
         Ok(r)
     })?
-}
-
-/// The edge pixels of a render of `settings` under `plan` through `camera` (the image's, where
-/// it renders a strip), and the edge rays a sample spends in each; `None` without them.
-pub(super) fn edge_map(
-    scene: &Scene,
-    camera: &Camera,
-    settings: &RenderSettings,
-    plan: &PassPlan,
-) -> Option<edges::EdgeMap> {
-    let (image, alloc) = edge_allocation(settings, plan)?;
-    Some(edges::EdgeMap::new(scene, camera, image, alloc))
-}
-
-/// The image size and the allocation [`edge_map`] finds a render's map with; `None` without
-/// edge rays.
-fn edge_allocation(
-    settings: &RenderSettings,
-    plan: &PassPlan,
-) -> Option<(UVec2, edges::Allocation)> {
-    if settings.edge_rays == 0 {
-        return None;
-    }
-    let image = plan
-        .strip
-        .as_ref()
-        .map_or(UVec2::new(settings.width, settings.height), |s| s.image);
-    let alloc = edges::Allocation {
-        seed: settings.seed,
-        integrator: settings.integrator(),
-        most: settings.edge_rays,
-    };
-    Some((image, alloc))
-}
-
-/// Whether `map` is the edge map a render of `settings` under `plan` would find itself.
-pub(super) fn edges_fit(map: &edges::EdgeMap, settings: &RenderSettings, plan: &PassPlan) -> bool {
-    edge_allocation(settings, plan).is_some_and(|(image, alloc)| map.fits(image, alloc))
 }
 
 /// Whether a guided render of `settings` under `plan` that trains its own guide keeps its

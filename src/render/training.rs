@@ -351,7 +351,7 @@ pub fn learn_guide_with(
         let mut stats = RenderStats::default();
         let start = Instant::now();
         // the edge pixels the render's own training would see: the same guide, bit for bit
-        let edges = super::edge_map(scene, &camera, settings, plan);
+        let edges = super::edges::edge_map(scene, &camera, settings, plan);
         struct Train<'a>(
             &'a Scene,
             &'a Camera,

@@ -45,7 +45,7 @@ impl<'a> Pilots<'a> {
         let edges = match &first {
             Some(s) => {
                 let camera = crate::render::strip_camera(scene, s, plan)?;
-                crate::render::edge_map(scene, &camera, s, plan).map(Arc::new)
+                crate::render::edges::edge_map(scene, &camera, s, plan).map(Arc::new)
             }
             None => None,
         };

@@ -58,6 +58,19 @@ impl Choice {
             100.0 * self.caustic,
             100.0 * CAUSTIC_GATE
         );
+        s += &self.stage_lines(&first, &caustic);
+        s + &format!(
+            "  efficiency relative to {first}; the best against it: z = {:.1} (switch above {SWITCH_Z}){}\n",
+            self.z,
+            self.weights()
+        )
+    }
+
+    /// The table's lines on what became of the guided candidates and on the candidates not
+    /// piloted, and why (`first`: the first candidate's name; `caustic`: its light's caustic
+    /// share against the gate, as the table words it).
+    fn stage_lines(&self, first: &str, caustic: &str) -> String {
+        let mut s = String::new();
         let chosen = self.rows.get(self.index).map(|r| r.candidate.to_string());
         let chosen = chosen.unwrap_or_default();
         let unpiloted = match self.stage {
@@ -86,11 +99,7 @@ impl Choice {
         if !others.is_empty() {
             s += &format!("  {others}: not piloted ({unpiloted})\n");
         }
-        s + &format!(
-            "  efficiency relative to {first}; the best against it: z = {:.1} (switch above {SWITCH_Z}){}\n",
-            self.z,
-            self.weights()
-        )
+        s
     }
 
     /// The candidates not piloted, comma-separated.
