@@ -396,7 +396,11 @@ def auto_pick(stderr):
     """The candidate `--strategy auto --stats` chose, as its table names it ("(its guided twin)"
     after it where the twin rendered), or None."""
     m = re.search(r"^  (\S+)\s.*<- chosen(, with guided directions)?", stderr, re.M)
-    return m and m.group(1) + (" (its guided twin)" if m.group(2) else "")
+    if m:
+        return m.group(1) + (" (its guided twin)" if m.group(2) else "")
+    # no pilot: the first candidate, or its guided twin where the probe found caustics
+    m = re.search(r"^auto: (\S+) chosen without a pilot", stderr, re.M)
+    return m and m.group(1)
 
 
 def equal_time_pairs(scene, w, h, seconds, configs, pairs=((1, 2), (3, 4)), log=None):

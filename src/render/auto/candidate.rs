@@ -127,7 +127,7 @@ pub const AUTO_REUSE: u32 = 4;
 /// The candidates when none are named: today's default (stratified points, Phong directions,
 /// MIS), the same with path reuse in blocks of [`AUTO_REUSE`]², and the guided twins of both
 /// ([`Candidate::guided`]), staged (the module doc): where the light is caustic mis's twin
-/// renders with its gate after mis's pilot alone, where path reuse beat mis the reusing twin
+/// renders with its gate and no pilot, where path reuse beat mis the reusing twin
 /// renders with its gate (on the rooms lit through a door or a slit, guiding and reuse together
 /// gain 2× over reuse alone at 10 s), and elsewhere neither (where reuse does not win neither
 /// does the guide, whose training would cost those renders a third of their time:

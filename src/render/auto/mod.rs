@@ -71,14 +71,26 @@
 //! Path reuse shares the paths' second vertices between the pixels of a block, so it lowers
 //! the variance of the light found from the second vertex on and of nothing else
 //! ([`crate::integrator::RayCounts::indirect`]). Where less than [`INDIRECT_GATE`] of the first
-//! candidate's pilot's light was indirect, no candidate with path reuse is piloted (the first
-//! pilot is the only one then, unless the list names others): on the scenes lit directly such a
-//! pilot, 3–4× a mis pilot's cost, was most of what auto paid for its choice of mis.
+//! candidate's light was indirect in the probe, no candidate with path reuse is piloted: on the
+//! scenes lit directly such a pilot, 3–4× a mis pilot's cost, was most of what auto paid for
+//! its choice of mis.
+//!
+//! The gates (this one and [`CAUSTIC_GATE`], below) read a probe: the first candidate rendered
+//! on the pilots' strip with the pilots' seed at [`PROBE_SPP`] (under a time limit the probe
+//! that measures the speed, [`PILOT_REPLICATES`] samples). Where they leave no candidate but
+//! the first to pilot (the default candidates on a scene lit directly), no pilot renders and the
+//! first is chosen: its own pilot would have measured nothing a choice needs. There mis's pilot,
+//! 4 spp as four 1-spp replicate passes, was the rest of what auto paid (30–50 ms of
+//! checker-plane's 0.3-s render; the probe is a quarter of its samples in one pass). The gate
+//! read by a probe of one sample per pixel is as sharp as by a pilot's four: over seeds 1–8 at
+//! each scene's own size, the probe's indirect share reads 23–24% on the Cornell box, 45–49% in
+//! the night hall, 5–6% on sun-sky, 7–8% on textured, 0 on the glossy plates; the glass scene's
+//! caustic share 6–8%.
 //!
 //! Guided candidates (but a guided first one) are staged ([`GuidedStage`]): the unguided
 //! candidates are piloted first, and the guided ones come in only where an unguided candidate
 //! other than the first beat it beyond the noise, where at least [`CAUSTIC_GATE`] of the first
-//! candidate's pilot's light came as caustics (through a mirror or glass after a Phong vertex:
+//! candidate's light came as caustics in the probe (through a mirror or glass after a Phong vertex:
 //! light only a bounce finds, which a guide learns to aim at), or where the list names no
 //! unguided one but the first (then they are piloted with the rest). Where they come in, the
 //! one considered is a *guided twin* ([`Candidate::guided`]: the same but for guided
@@ -96,11 +108,11 @@
 //!   4`; on the Cornell box (guiding adds nothing) 0.97×; in the night hall, where the guide
 //!   loses 1.2× by its gate's first reading, 0.96× (with its gate closing at that reading: see
 //!   [`super::gate::GATE_Z_ALONE`]; 0.82× when it waited for a second).
-//! - **Caustics: the first candidate's twin after its pilot alone.** Next-event estimation
+//! - **Caustics: the first candidate's twin, no pilot.** Next-event estimation
 //!   never reaches a caustic; a guide is what finds it. Path reuse shares the light samples'
 //!   connections between pixels, and a caustic comes by no connection: with guided directions
-//!   it cost the lamp 1.08× and the glass scene 1.33× in relMSE at 10 s. So where the first
-//!   candidate's pilot finds caustics and its twin is listed, no other candidate is piloted.
+//!   it cost the lamp 1.08× and the glass scene 1.33× in relMSE at 10 s. So where the probe
+//!   finds caustics and the first candidate's twin is listed, no candidate is piloted.
 //!   The gate, not a pilot, guards the choice, so [`CAUSTIC_GATE`] is low: any scene with a
 //!   mirror or glass in the light's way.
 //! - Where the twin is not listed, every guided candidate is piloted after the unguided ones:
@@ -133,9 +145,16 @@ use std::time::{Duration, Instant};
 /// Replicates of every pilot.
 pub const PILOT_REPLICATES: u32 = 4;
 
-/// The share of the first candidate's pilot's light found from the second vertex on
-/// ([`crate::integrator::RayCounts::indirect_share`]) below which no candidate with path reuse
-/// is piloted (the module doc). Path reuse shares the paths' second vertices between pixels,
+/// The samples per pixel of the probe (one replicate) that renders the first candidate on the
+/// pilots' strip before any pilot: the gates read its light's shares ([`INDIRECT_GATE`],
+/// [`CAUSTIC_GATE`]), and where they leave no candidate but the first to pilot, it is chosen
+/// without a pilot. (Under a time limit the probe is [`PILOT_REPLICATES`] samples, one per
+/// replicate: it measures the speed too.)
+pub const PROBE_SPP: u32 = 1;
+
+/// The share of the first candidate's light found from the second vertex on in the probe
+/// ([`crate::integrator::RayCounts::indirect_share`], [`PROBE_SPP`]) below which no candidate
+/// with path reuse is piloted (the module doc). Path reuse shares the paths' second vertices between pixels,
 /// so it can lower only the variance of the light found from there on; where that light is a
 /// small part of the image, its pilot (the dearest: 3–4× a mis pilot's time) buys nothing.
 /// Measured with `vrpt render SCENE --spp 16 --stats` (the share is printed with the rays): the
@@ -222,6 +241,8 @@ pub struct PilotRow {
 pub struct Choice {
     /// The candidate chosen.
     pub candidate: Candidate,
+    /// The first candidate (the default: the probe's, and the one the others must beat).
+    pub first: Candidate,
     /// Its row (with [`GuidedStage::Rendered`], its unguided twin's: the chosen one has none).
     pub index: usize,
     /// The candidates' pilots: the unguided candidates' in the order given, then the guided
@@ -235,15 +256,18 @@ pub struct Choice {
     pub cost: Cost,
     /// `z` of the most efficient candidate against the first (0 when it is the first).
     pub z: f64,
-    /// The share of the first candidate's pilot's light that was caustic
+    /// The share of the first candidate's light that was caustic in the probe
     /// ([`crate::integrator::RayCounts::caustic_share`]; see [`CAUSTIC_GATE`]).
     pub caustic: f64,
-    /// The share of the first candidate's pilot's light found from the second vertex on
+    /// The share of the first candidate's light found from the second vertex on in the probe
     /// ([`crate::integrator::RayCounts::indirect_share`]; see [`INDIRECT_GATE`]).
     pub indirect: f64,
-    /// Wall time of all the pilots.
+    /// The probe's samples per pixel ([`PROBE_SPP`]; under a time limit [`PILOT_REPLICATES`],
+    /// one per replicate).
+    pub probe: u32,
+    /// Wall time of the probe and all the pilots.
     pub elapsed: Duration,
-    /// The tiles the pilots rendered, and the image's (partial ones included).
+    /// The tiles the probe and the pilots rendered, and the image's (partial ones included).
     pub tiles: (u32, u32),
     /// The guide the chosen candidate's pilot learned, when its directions are guided: the
     /// render samples with it ([`PassPlan::guide`]).
@@ -253,11 +277,11 @@ pub struct Choice {
     pub edges: Option<Arc<EdgeMap>>,
 }
 
-/// The share of the first candidate's pilot's light that came as caustics (through a mirror or
-/// glass after a Phong vertex: [`crate::integrator::RayCounts::caustic_share`]) at or above which
-/// the guided candidates come in even where no unguided candidate beat the first, the first's
-/// guided twin rendered with its gate and no other pilot where the list holds it (the module
-/// doc). Caustics are light no light sample reaches, which only a bounce aimed at
+/// The share of the first candidate's light in the probe that came as caustics (through a
+/// mirror or glass after a Phong vertex: [`crate::integrator::RayCounts::caustic_share`]) at or
+/// above which the guided candidates come in even where no unguided candidate beat the first,
+/// the first's guided twin rendered with its gate and no pilot where the list holds it (the
+/// module doc). Caustics are light no light sample reaches, which only a bounce aimed at
 /// the mirror or glass finds, and path reuse does not help there; a guide learns to aim.
 /// Measured with `vrpt render SCENE --spp 16` (the share is printed with the rays): the lamp
 /// behind its glass shade 54% (the rest is the lamp seen through the shade from the camera, not
@@ -346,101 +370,129 @@ pub fn choose(
     plan: &PassPlan,
     candidates: &[Candidate],
 ) -> Result<Choice> {
+    if candidates.is_empty() {
+        return Err(crate::error::Error::Settings("auto: no candidates".into()));
+    }
     let start = Instant::now();
     let cost = match plan.time_limit {
         Some(_) => Cost::Seconds,
         None => Cost::Rays,
     };
     let mut pilots = Pilots::new(scene, settings, plan, candidates, cost)?;
+    // the probe: the first candidate's light shares, which the gates read, and under a time
+    // limit its speed. The probe is not the first candidate's pilot even when the spp comes
+    // out the same: it is the first render of the process on these tiles and pays for the
+    // threads, caches and pages it warms (glass, 4-spp pilots: the probe taken as mis's pilot
+    // read its time 1.02× reuse 4's, which takes 1.79× mis's time at 10 s, and auto chose
+    // reuse, z 9.5)
+    let probe = match plan.time_limit {
+        None => pilots.run_as(0, PROBE_SPP, 1)?,
+        Some(_) => pilots.run(0, PILOT_REPLICATES)?,
+    };
     let spp = match plan.time_limit {
         None => pilot_spp(settings.spp),
         Some(limit) => {
-            // the first candidate's speed, from a pilot of one sample per replicate, and the
-            // spp the image would take at it in the time limit. The probe is not the first
-            // candidate's pilot even when the spp comes out the same: it is the first render
-            // of the process on these tiles and pays for the threads, caches and pages it
-            // warms (glass, 4-spp pilots: the probe taken as mis's pilot read its time 1.02×
-            // reuse 4's, which takes 1.79× mis's time at 10 s, and auto chose reuse, z 9.5)
-            let probe = pilots.run(0, PILOT_REPLICATES)?;
+            // the spp the image would take at the probe's speed in the time limit
             let per_spp = probe.seconds / probe.spp as f64 / pilots.share;
             let fits = limit.as_secs_f64() / per_spp.max(1e-12);
             pilot_spp((fits as u32).min(settings.spp))
         }
     };
-    let (ks, done, stage) = pilot_staged(&mut pilots, candidates, spp)?;
-    let caustic = done.first().map_or(0.0, |p| p.caustic);
-    let indirect = done.first().map_or(0.0, |p| p.indirect);
+    let gates = Gates {
+        caustic: probe.caustic >= CAUSTIC_GATE,
+        direct: probe.indirect < INDIRECT_GATE,
+    };
+    let (ks, done, stage) = pilot_staged(&mut pilots, candidates, spp, gates)?;
     let rows = shared_denominator(pilots.width, &done);
     let (index, z) = decide(&rows);
-    let candidate = candidate_of(&rows, index, stage);
+    // the first candidate where none was piloted
+    let k = ks.get(index).copied().unwrap_or(0);
+    let candidate = match stage {
+        GuidedStage::Rendered => candidates[k].guided(),
+        _ => candidates[k],
+    };
     let chosen = candidate.settings(settings);
     let edges = (pilots.edges.clone()).filter(|m| super::edges::edges_fit(m, &chosen, plan));
     Ok(Choice {
         candidate,
+        first: candidates[0],
         index,
         rows,
         unpiloted: (0..candidates.len())
-            .filter(|&k| !ks.contains(&k) && candidates[k] != candidate)
-            .map(|k| candidates[k])
+            .filter(|&j| !ks.contains(&j) && candidates[j] != candidate)
+            .map(|j| candidates[j])
             .collect(),
         stage,
         cost,
         z,
-        caustic,
-        indirect,
+        caustic: probe.caustic,
+        indirect: probe.indirect,
+        probe: probe.spp,
         elapsed: start.elapsed(),
         tiles: pilots.tiles,
-        guide: pilots.guides[ks[index]].take(),
+        guide: match stage {
+            GuidedStage::Rendered => None,
+            _ => pilots.guides[k].take(),
+        },
         edges,
     })
 }
 
-/// The candidate chosen by row `index` of `rows` where the guided candidates ended in `stage`
-/// (with [`GuidedStage::Rendered`], the row's guided twin).
-fn candidate_of(rows: &[PilotRow], index: usize, stage: GuidedStage) -> Candidate {
-    match stage {
-        GuidedStage::Rendered => rows[index].candidate.guided(),
-        _ => rows[index].candidate,
-    }
+/// What the gates read from the probe ([`PROBE_SPP`]): whether enough of the first candidate's
+/// light was caustic ([`CAUSTIC_GATE`]), and whether too little was indirect ([`INDIRECT_GATE`]).
+#[derive(Clone, Copy, Debug)]
+struct Gates {
+    caustic: bool,
+    direct: bool,
 }
 
-/// The pilots of `candidates` at `spp`, staged (the module doc): the first; where its light is
-/// caustic enough and its guided twin is listed, no more (the twin renders); else the other
-/// unguided ones, and where one of them beat the first or the light is caustic, no more where
-/// the guided twin of their choice is listed (it renders), else every guided candidate. Where
-/// too little of the first's light is indirect ([`INDIRECT_GATE`]), no candidate with path
-/// reuse is piloted. The candidates piloted, their pilots and what became of the guided ones.
+/// The pilots of `candidates` at `spp`, staged (the module doc): where the probe's light is
+/// caustic enough and the first's guided twin is listed, none (the twin renders); else the
+/// first and the other unguided ones, and where one of them beat the first or the light is
+/// caustic, no more where the guided twin of their choice is listed (it renders), else every
+/// guided candidate. Where too little of the probe's light is indirect, no candidate with path
+/// reuse is piloted; where no candidate but the first is left to pilot, none is (the first is
+/// chosen). The candidates piloted, their pilots and what became of the guided ones.
 fn pilot_staged(
     pilots: &mut Pilots,
     candidates: &[Candidate],
     spp: u32,
+    gates: Gates,
 ) -> Result<(Vec<usize>, Vec<pilot::Pilot>, GuidedStage)> {
     let n = candidates.len();
     let guided = |k: usize| k > 0 && candidates[k].strategy.directions == Directions::Guided;
     let staged = (1..n).any(|k| !guided(k)) && (1..n).any(guided);
     let twin_of = |c: Candidate| (1..n).find(|&k| guided(k) && candidates[k] == c.guided());
-    let mut ks = vec![0];
-    let mut done = vec![pilots.run(0, spp)?];
-    let caustic = done[0].caustic >= CAUSTIC_GATE;
-    if staged && caustic && twin_of(candidates[0]).is_some() {
+    let (mut ks, mut done) = (Vec::new(), Vec::new());
+    if staged && gates.caustic && twin_of(candidates[0]).is_some() {
         return Ok((ks, done, GuidedStage::Rendered));
     }
-    let direct = done[0].indirect < INDIRECT_GATE;
-    let shares = |k: &usize| !(direct && candidates[*k].reuse > 1);
-    for k in (1..n).filter(|&k| !staged || !guided(k)).filter(shares) {
+    let shares = |k: &usize| !(gates.direct && candidates[*k].reuse > 1);
+    let width = pilots.width;
+    let mut pilot = |ks: &mut Vec<usize>, done: &mut Vec<pilot::Pilot>, k: usize| {
+        if ks.is_empty() && k > 0 {
+            done.push(pilots.run(0, spp)?);
+            ks.push(0);
+        }
         done.push(pilots.run(k, spp)?);
         ks.push(k);
+        Ok::<_, crate::error::Error>(())
+    };
+    for k in (1..n).filter(|&k| !staged || !guided(k)).filter(shares) {
+        pilot(&mut ks, &mut done, k)?;
     }
-    let winner = done[decide(&shared_denominator(pilots.width, &done)).0].candidate;
-    if !staged || !(caustic || winner != candidates[0]) {
+    let winner = match done.is_empty() {
+        true => candidates[0],
+        false => done[decide(&shared_denominator(width, &done)).0].candidate,
+    };
+    if !staged || !(gates.caustic || winner != candidates[0]) {
         return Ok((ks, done, GuidedStage::Shut));
     }
     if twin_of(winner).is_some() {
         return Ok((ks, done, GuidedStage::Rendered));
     }
     for k in (1..n).filter(|&k| guided(k)).filter(shares) {
-        done.push(pilots.run(k, spp)?);
-        ks.push(k);
+        pilot(&mut ks, &mut done, k)?;
     }
     Ok((ks, done, GuidedStage::Piloted))
 }

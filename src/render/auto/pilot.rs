@@ -77,11 +77,17 @@ impl<'a> Pilots<'a> {
 
     /// The pilot of candidate `k` at `spp` samples per pixel (all replicates).
     pub(super) fn run(&mut self, k: usize, spp: u32) -> Result<Pilot> {
+        self.run_as(k, spp, PILOT_REPLICATES)
+    }
+
+    /// Candidate `k` on the pilots' strip with the pilots' seed at `spp` samples per pixel as
+    /// `replicates` replicates (the probe: [`PROBE_SPP`] as one).
+    pub(super) fn run_as(&mut self, k: usize, spp: u32, replicates: u32) -> Result<Pilot> {
         let s = RenderSettings {
             seed: pilot_seed(self.settings.seed),
             first_sample: 0,
             spp,
-            replicates: PILOT_REPLICATES,
+            replicates,
             width: self.width,
             height: self.height,
             ..self.candidates[k].settings(self.settings)

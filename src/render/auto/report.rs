@@ -19,14 +19,32 @@ impl Choice {
             .max()
             .unwrap_or(8)
             .max(8);
+        let first = self.first.to_string();
+        let probe = format!(
+            "{:.0}% of {first}'s light indirect in a probe of {} spp",
+            100.0 * self.indirect,
+            self.probe
+        );
+        if self.rows.is_empty() {
+            let s = format!(
+                "auto: {} chosen without a pilot (a probe of {} spp on {} of {} tiles in {:.2} s: \
+                 {:.0}% of {first}'s light indirect)\n",
+                self.candidate,
+                self.probe,
+                self.tiles.0,
+                self.tiles.1,
+                self.elapsed.as_secs_f64(),
+                100.0 * self.indirect,
+            );
+            return s + &self.stage_lines(&first, &self.caustic_words(&first));
+        }
         let mut s = format!(
-            "auto: pilots of {} spp ({} replicates) on {} of {} tiles in {:.2} s ({:.0}% of the first's light indirect)\n  {:w$}  {:>10}  {:>9}  {:>9}  {:>10}\n",
+            "auto: pilots of {} spp ({} replicates) on {} of {} tiles in {:.2} s ({probe})\n  {:w$}  {:>10}  {:>9}  {:>9}  {:>10}\n",
             self.rows.first().map_or(0, |r| r.spp),
             PILOT_REPLICATES,
             self.tiles.0,
             self.tiles.1,
             self.elapsed.as_secs_f64(),
-            100.0 * self.indirect,
             "strategy",
             "relMSE",
             "± se",
@@ -49,20 +67,20 @@ impl Choice {
                 r.efficiency / e0,
             );
         }
-        let first = self
-            .rows
-            .first()
-            .map_or(String::new(), |r| r.candidate.to_string());
-        let caustic = format!(
-            "{:.0}% of {first}'s light caustic, gate {:.0}%",
-            100.0 * self.caustic,
-            100.0 * CAUSTIC_GATE
-        );
-        s += &self.stage_lines(&first, &caustic);
+        s += &self.stage_lines(&first, &self.caustic_words(&first));
         s + &format!(
             "  efficiency relative to {first}; the best against it: z = {:.1} (switch above {SWITCH_Z}){}\n",
             self.z,
             self.weights()
+        )
+    }
+
+    /// The first candidate's (`first`'s) caustic share against the gate, as the table words it.
+    fn caustic_words(&self, first: &str) -> String {
+        format!(
+            "{:.0}% of {first}'s light caustic, gate {:.0}%",
+            100.0 * self.caustic,
+            100.0 * CAUSTIC_GATE
         )
     }
 
@@ -71,8 +89,11 @@ impl Choice {
     /// share against the gate, as the table words it).
     fn stage_lines(&self, first: &str, caustic: &str) -> String {
         let mut s = String::new();
-        let chosen = self.rows.get(self.index).map(|r| r.candidate.to_string());
-        let chosen = chosen.unwrap_or_default();
+        // the row chosen (with `Rendered`, the twin's unguided candidate), the first without one
+        let chosen = self
+            .rows
+            .get(self.index)
+            .map_or(self.first, |r| r.candidate);
         let unpiloted = match self.stage {
             GuidedStage::Shut => format!("guided, no unguided candidate beat {first}, {caustic}"),
             GuidedStage::Piloted => format!("guided, not the guided twin of {chosen}"),
@@ -148,6 +169,10 @@ impl Choice {
         let rows: Vec<String> = (self.rows.iter())
             .map(|r| format!("{} {:.3}", r.candidate, r.efficiency / e0))
             .collect();
+        let rows = match rows.is_empty() {
+            true => "no pilot".to_string(),
+            false => format!("efficiency {}", rows.join(", ")),
+        };
         let unpiloted = match self.unpiloted.is_empty() {
             true => String::new(),
             false => format!(" (not piloted: {})", self.unpiloted_names()),
@@ -157,12 +182,12 @@ impl Choice {
             _ => "",
         };
         format!(
-            "chose {}{rendered}; efficiency {}{unpiloted}; z {:.2}; caustic {:.3}; indirect {:.3}; pilots {} spp on {} of {} tiles, cost {}",
+            "chose {}{rendered}; {rows}{unpiloted}; z {:.2}; caustic {:.3}; indirect {:.3}; probe {} spp; pilots {} spp on {} of {} tiles, cost {}",
             self.candidate,
-            rows.join(", "),
             self.z,
             self.caustic,
             self.indirect,
+            self.probe,
             self.rows.first().map_or(0, |r| r.spp),
             self.tiles.0,
             self.tiles.1,
