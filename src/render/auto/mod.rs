@@ -154,9 +154,10 @@ pub const PROBE_SPP: u32 = 1;
 
 /// The share of the first candidate's light found from the second vertex on in the probe
 /// ([`crate::integrator::RayCounts::indirect_share`], [`PROBE_SPP`]) below which no candidate
-/// with path reuse is piloted (the module doc). Path reuse shares the paths' second vertices between pixels,
-/// so it can lower only the variance of the light found from there on; where that light is a
-/// small part of the image, its pilot (the dearest: 3–4× a mis pilot's time) buys nothing.
+/// with path reuse is piloted (the module doc). Path reuse shares the paths' second vertices
+/// between pixels, so it can lower only the variance of the light found from there on; where
+/// that light is a small part of the image, its pilot (the dearest: 3–4× a mis pilot's time)
+/// buys nothing.
 /// Measured with `vrpt render SCENE --spp 16 --stats` (the share is printed with the rays): the
 /// five scenes lit directly 0–7% (checker-plane and lit-checker 0, the glossy plates 0.3%,
 /// sun-sky 4.7%, textured 7.2%), where path reuse gains at most 1.07× over mis at 10 s and
