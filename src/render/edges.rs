@@ -88,19 +88,26 @@ pub const EDGE_CONTRAST: f32 = 0.25;
 /// at [`EDGE_CONTRAST`] alone cost 7–10% of the time and left the MSE where it was, 1.253e-4).
 pub const SKY_STEP: f32 = 10.0;
 
-/// The edge map of a render of `settings` under `plan` through `camera`: the plan's
-/// ([`super::PassPlan::edges`]), else the one [`edge_map`] finds; its rays and edge pixels
-/// counted in `stats`.
+/// The edge map of a render (or a guide's training) of `settings` under `plan` through
+/// `camera`: the plan's ([`super::PassPlan::edges`]), else the one [`edge_map`] finds.
+pub(super) fn of_plan(
+    scene: &Scene,
+    camera: &Camera,
+    settings: &RenderSettings,
+    plan: &PassPlan,
+) -> Option<Arc<EdgeMap>> {
+    (plan.edges.clone()).or_else(|| edge_map(scene, camera, settings, plan).map(Arc::new))
+}
+
+/// The edge map of a render of `settings` under `plan` through `camera` ([`of_plan`]), its
+/// rays and edge pixels counted in `stats`.
 pub(super) fn of_render(
     scene: &Scene,
     camera: &Camera,
     (settings, plan): (&RenderSettings, &PassPlan),
     stats: &mut RenderStats,
 ) -> Option<Arc<EdgeMap>> {
-    let edges = match &plan.edges {
-        Some(m) => Some(m.clone()),
-        None => edge_map(scene, camera, settings, plan).map(Arc::new),
-    };
+    let edges = of_plan(scene, camera, settings, plan);
     if let Some(e) = &edges {
         stats.rays.add(&e.rays);
         stats.edge_pixels = e.count;

@@ -350,8 +350,9 @@ pub fn learn_guide_with(
     with_threads(settings.threads, || {
         let mut stats = RenderStats::default();
         let start = Instant::now();
-        // the edge pixels the render's own training would see: the same guide, bit for bit
-        let edges = super::edges::edge_map(scene, &camera, settings, plan);
+        // the edge pixels the render's own training would see (the plan's where it hands a
+        // map, as `--strategy auto`'s pilots do): the same guide, bit for bit
+        let edges = super::edges::of_plan(scene, &camera, settings, plan);
         struct Train<'a>(
             &'a Scene,
             &'a Camera,
@@ -384,7 +385,7 @@ pub fn learn_guide_with(
             budget,
             start,
             &mut stats,
-            edges.as_ref(),
+            edges.as_deref(),
         );
         let tree = with_sampler(settings.strategy.sampler, work);
         stats.elapsed = start.elapsed();
