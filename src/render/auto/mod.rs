@@ -52,6 +52,17 @@
 //! same image as `--strategy CHOSEN [--reuse K | --roulette ears]` (but for a guided candidate's
 //! guide, below), so each choice is unbiased and so is their mixture.
 //!
+//! **Early pilots.** The pilots render first at a quarter of their spp ([`early_spp`], at least
+//! one sample a replicate); where these decide beyond doubt (the rule switches with `z >`
+//! [`EARLY_Z`] to a candidate at least [`EARLY_RATIO`] times as efficient as the first), the
+//! full pilots do not render, else they do (the early ones discarded). Both thresholds are fixed
+//! before any pilot renders, so the choice is still a function of the pilots alone. At 10 s on
+//! the scenes lit indirectly (the door, door-dark, the gap, the Cornell box, the night hall,
+//! Mitsuba's box; seeds 1, 2) the early pilots chose what the full ones chose (z 10–54), in
+//! 0.07–0.19 s where the full pilots took 0.35–0.50 s. A pilot of one sample a replicate may
+//! miss rare paths: on the door at 96×64 one seed in 20 read path reuse 1.2× (z 2.6) and fell
+//! back to the full pilots, which read it 2.5× (z 14).
+//!
 //! A guided candidate (`stratified+guided+mis`) first learns its guide on the pilots' strip,
 //! with its training's own seeds and a budget of [`GUIDE_SHARE`] of the render's (as many
 //! samples per pixel of the strip as a guided render's own training takes per pixel of the
@@ -266,6 +277,9 @@ pub struct Choice {
     /// The probe's samples per pixel ([`PROBE_SPP`]; under a time limit [`PILOT_REPLICATES`],
     /// one per replicate).
     pub probe: u32,
+    /// The full pilots' samples per pixel; the rows' are [`early_spp`] of it where the early
+    /// pilots decided ([`EARLY_Z`]).
+    pub planned: u32,
     /// Wall time of the probe and all the pilots.
     pub elapsed: Duration,
     /// The tiles the probe and the pilots rendered, and the image's (partial ones included).
@@ -342,6 +356,33 @@ pub fn pilot_spp(spp: u32) -> u32 {
     (share / r * r).max(r)
 }
 
+/// The z beyond which pilots of a quarter of the spp ([`early_spp`]) decide, where the most
+/// efficient candidate is also at least [`EARLY_RATIO`] times as efficient as the first: then
+/// the full pilots do not render. The relMSE's standard error hardly shrinks with the pilots'
+/// spp (each pixel's variance comes from [`PILOT_REPLICATES`] replicates at any spp), but a
+/// pilot of a few samples a pixel misses rare paths and its wall time is noisier; the full
+/// pilots stay for every choice that is not clear.
+pub const EARLY_Z: f64 = 6.0;
+
+/// The least efficiency ratio, best over first, at which early pilots decide ([`EARLY_Z`]):
+/// the pilots' wall times, the cost under a time limit, vary by about 12% a pilot and more for
+/// a shorter one, and are not in `z`; a ratio of 1.5 is beyond what that noise makes.
+pub const EARLY_RATIO: f64 = 1.5;
+
+/// The spp of the early pilots for pilots of `spp`: a quarter, a multiple of
+/// [`PILOT_REPLICATES`], at least one sample a replicate.
+pub fn early_spp(spp: u32) -> u32 {
+    let r = PILOT_REPLICATES;
+    (spp / 4 / r * r).max(r)
+}
+
+/// Whether early pilots' `rows` decide beyond doubt: the rule ([`decide`]) switches from the
+/// first with `z >` [`EARLY_Z`] to a candidate at least [`EARLY_RATIO`] as efficient.
+fn decided_early(rows: &[PilotRow]) -> bool {
+    let (best, z) = decide(rows);
+    best != 0 && z > EARLY_Z && rows[best].efficiency >= EARLY_RATIO * rows[0].efficiency
+}
+
 /// The candidate the rule of the module doc chooses among `rows` (the first is the default),
 /// and the `z` of the most efficient one against the first.
 pub fn decide(rows: &[PilotRow]) -> (usize, f64) {
@@ -403,7 +444,19 @@ pub fn choose(
         caustic: probe.caustic >= CAUSTIC_GATE,
         direct: probe.indirect < INDIRECT_GATE,
     };
-    let (ks, done, stage) = pilot_staged(&mut pilots, candidates, spp, gates)?;
+    // pilots of a quarter of the spp first; where they decide beyond doubt, no more
+    let early = early_spp(spp);
+    let mut staged = None;
+    if early < spp {
+        let (ks, done, stage) = pilot_staged(&mut pilots, candidates, early, gates)?;
+        if done.is_empty() || decided_early(&shared_denominator(pilots.width, &done)) {
+            staged = Some((ks, done, stage));
+        }
+    }
+    let (ks, done, stage) = match staged {
+        Some(s) => s,
+        None => pilot_staged(&mut pilots, candidates, spp, gates)?,
+    };
     let rows = shared_denominator(pilots.width, &done);
     let (index, z) = decide(&rows);
     // the first candidate where none was piloted
@@ -429,6 +482,7 @@ pub fn choose(
         caustic: probe.caustic,
         indirect: probe.indirect,
         probe: probe.spp,
+        planned: spp,
         elapsed: start.elapsed(),
         tiles: pilots.tiles,
         guide: match stage {

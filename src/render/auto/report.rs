@@ -38,9 +38,16 @@ impl Choice {
             );
             return s + &self.stage_lines(&first, &self.caustic_words(&first));
         }
+        let spp = self.rows.first().map_or(0, |r| r.spp);
+        let early = match spp < self.planned {
+            true => format!(
+                ", early: decided beyond doubt before the {} planned",
+                self.planned
+            ),
+            false => String::new(),
+        };
         let mut s = format!(
-            "auto: pilots of {} spp ({} replicates) on {} of {} tiles in {:.2} s ({probe})\n  {:w$}  {:>10}  {:>9}  {:>9}  {:>10}\n",
-            self.rows.first().map_or(0, |r| r.spp),
+            "auto: pilots of {spp} spp ({} replicates{early}) on {} of {} tiles in {:.2} s ({probe})\n  {:w$}  {:>10}  {:>9}  {:>9}  {:>10}\n",
             PILOT_REPLICATES,
             self.tiles.0,
             self.tiles.1,
@@ -182,13 +189,14 @@ impl Choice {
             _ => "",
         };
         format!(
-            "chose {}{rendered}; {rows}{unpiloted}; z {:.2}; caustic {:.3}; indirect {:.3}; probe {} spp; pilots {} spp on {} of {} tiles, cost {}",
+            "chose {}{rendered}; {rows}{unpiloted}; z {:.2}; caustic {:.3}; indirect {:.3}; probe {} spp; pilots {} spp of {} planned on {} of {} tiles, cost {}",
             self.candidate,
             self.z,
             self.caustic,
             self.indirect,
             self.probe,
             self.rows.first().map_or(0, |r| r.spp),
+            self.planned,
             self.tiles.0,
             self.tiles.1,
             match self.cost {

@@ -112,6 +112,30 @@ fn pilots_take_a_sixteenth_in_whole_rounds_of_replicates() {
     assert_ne!(pilot_seed(0), 0);
 }
 
+#[test]
+fn early_pilots_take_a_quarter_and_decide_only_beyond_doubt() {
+    assert_eq!(early_spp(4), 4);
+    assert_eq!(early_spp(8), 4);
+    assert_eq!(early_spp(16), 4);
+    assert_eq!(early_spp(60), 12);
+    let [a, b] = [default_candidates()[0], default_candidates()[1]];
+    // twice as efficient, relMSE known to 5%: z = ln 2 / (0.05·√2) = 9.8, ratio 2: decided
+    let clear = [row(a, 0.02, 0.001, 100.0), row(b, 0.01, 0.0005, 100.0)];
+    assert!(decide(&clear).1 > EARLY_Z && decided_early(&clear));
+    // 1.4 times, known to 2%: z = 11.9 but within what the pilots' times may vary: not decided
+    let close = [row(a, 0.014, 2.8e-4, 100.0), row(b, 0.01, 2e-4, 100.0)];
+    assert!(decide(&close).1 > EARLY_Z && !decided_early(&close));
+    // twice, known to 10%: z = 4.9, a switch (above SWITCH_Z) but not beyond doubt
+    let noisy = [row(a, 0.02, 0.002, 100.0), row(b, 0.01, 0.001, 100.0)];
+    assert_eq!(decide(&noisy).0, 1);
+    assert!(!decided_early(&noisy));
+    // the first kept: the full pilots decide
+    assert!(!decided_early(&[
+        row(a, 0.01, 1e-4, 1.0),
+        row(b, 0.02, 1e-4, 1.0)
+    ]));
+}
+
 /// A guided candidate's guide trains on an eighth of the render's budget: of its time limit,
 /// and of its samples, as samples per pixel of the strip (a quarter of the image: 4× as many).
 #[test]
