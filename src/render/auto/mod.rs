@@ -52,16 +52,11 @@
 //! same image as `--strategy CHOSEN [--reuse K | --roulette ears]` (but for a guided candidate's
 //! guide, below), so each choice is unbiased and so is their mixture.
 //!
-//! **Early pilots.** The pilots render first at a quarter of their spp ([`early_spp`], at least
-//! one sample a replicate); where these decide beyond doubt (the rule switches with `z >`
-//! [`EARLY_Z`] to a candidate at least [`EARLY_RATIO`] times as efficient as the first), the
-//! full pilots do not render, else they do (the early ones discarded). Both thresholds are fixed
-//! before any pilot renders, so the choice is still a function of the pilots alone. At 10 s on
-//! the scenes lit indirectly (the door, door-dark, the gap, the Cornell box, the night hall,
-//! Mitsuba's box; seeds 1, 2) the early pilots chose what the full ones chose (z 10–54), in
-//! 0.07–0.19 s where the full pilots took 0.35–0.50 s. A pilot of one sample a replicate may
-//! miss rare paths: on the door at 96×64 one seed in 20 read path reuse 1.2× (z 2.6) and fell
-//! back to the full pilots, which read it 2.5× (z 14).
+//! **Early pilots.** The pilots render first at a quarter of their spp ([`early_spp`]); where
+//! these decide beyond doubt ([`EARLY_Z`], [`EARLY_RATIO`], fixed before any pilot renders) the
+//! full pilots do not render, else they do and the early ones are discarded: at 10 s on the
+//! scenes lit indirectly the pilots took 0.07–0.19 s where the full ones took 0.35–0.50 s, and
+//! chose alike (`docs/performance.md`).
 //!
 //! A guided candidate (`stratified+guided+mis`) first learns its guide on the pilots' strip,
 //! with its training's own seeds and a budget of [`GUIDE_SHARE`] of the render's (as many
@@ -370,8 +365,7 @@ pub const EARLY_Z: f64 = 6.0;
 /// a shorter one, and are not in `z`; a ratio of 1.5 is beyond what that noise makes.
 pub const EARLY_RATIO: f64 = 1.5;
 
-/// The spp of the early pilots for pilots of `spp`: a quarter, a multiple of
-/// [`PILOT_REPLICATES`], at least one sample a replicate.
+/// The early pilots' spp for pilots of `spp`: a quarter, in whole rounds of replicates (≥ 1).
 pub fn early_spp(spp: u32) -> u32 {
     let r = PILOT_REPLICATES;
     (spp / 4 / r * r).max(r)
@@ -382,6 +376,24 @@ pub fn early_spp(spp: u32) -> u32 {
 fn decided_early(rows: &[PilotRow]) -> bool {
     let (best, z) = decide(rows);
     best != 0 && z > EARLY_Z && rows[best].efficiency >= EARLY_RATIO * rows[0].efficiency
+}
+
+/// The staged pilots ([`pilot_staged`]) at [`early_spp`] of `spp` where they pilot nothing or
+/// decide beyond doubt ([`decided_early`]), else those at `spp`.
+fn pilot_early_then_full(
+    pilots: &mut Pilots,
+    candidates: &[Candidate],
+    spp: u32,
+    gates: Gates,
+) -> Result<(Vec<usize>, Vec<pilot::Pilot>, GuidedStage)> {
+    let early = early_spp(spp);
+    if early < spp {
+        let staged = pilot_staged(pilots, candidates, early, gates)?;
+        if staged.1.is_empty() || decided_early(&shared_denominator(pilots.width, &staged.1)) {
+            return Ok(staged);
+        }
+    }
+    pilot_staged(pilots, candidates, spp, gates)
 }
 
 /// The candidate the rule of the module doc chooses among `rows` (the first is the default),
@@ -445,19 +457,7 @@ pub fn choose(
         caustic: probe.caustic >= CAUSTIC_GATE,
         direct: probe.indirect < INDIRECT_GATE,
     };
-    // pilots of a quarter of the spp first; where they decide beyond doubt, no more
-    let early = early_spp(spp);
-    let mut staged = None;
-    if early < spp {
-        let (ks, done, stage) = pilot_staged(&mut pilots, candidates, early, gates)?;
-        if done.is_empty() || decided_early(&shared_denominator(pilots.width, &done)) {
-            staged = Some((ks, done, stage));
-        }
-    }
-    let (ks, done, stage) = match staged {
-        Some(s) => s,
-        None => pilot_staged(&mut pilots, candidates, spp, gates)?,
-    };
+    let (ks, done, stage) = pilot_early_then_full(&mut pilots, candidates, spp, gates)?;
     let rows = shared_denominator(pilots.width, &done);
     let (index, z) = decide(&rows);
     // the first candidate where none was piloted
