@@ -96,10 +96,12 @@ pub struct RenderRequest {
     /// does --reuse K > 1, whose final samples outweigh the unreused training's) [default: keep]
     #[arg(long, value_name = "WHAT", value_parser = ["keep", "discard"])]
     pub training_images: Option<String>,
-    /// With --directions guided and its training images kept: `on` probes the guide against
-    /// Phong directions during its training (up to three iterations, from the first of 2^17
-    /// paths) and renders the rest without it where it loses beyond the noise twice in a row
-    /// (the glossy plates), `off` guides whatever the probes would read [default: on]
+    /// With --directions guided: `on` probes the guide against Phong directions during its
+    /// training (up to three iterations, from the first of 2^17 paths) and renders the rest
+    /// without it where it loses beyond the noise twice in a row, or once far beyond it (the
+    /// glossy plates); where the training images are discarded (--reuse K > 1, or `discard`) the
+    /// guide must be ahead by 1.11x to stay. `off` guides whatever the probes would read
+    /// [default: on]
     #[arg(long, value_name = "ON/OFF", value_parser = ["on", "off"])]
     pub guide_gate: Option<String>,
     /// With --roulette ears: also write the learned factor at each pixel's first vertex (over

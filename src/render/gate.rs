@@ -30,7 +30,9 @@
 //! have `z >` [`GATE_Z`] (a guide still learning loses its first readings: see
 //! [`GATE_PATHS`]) or one has `z >` [`GATE_Z_ALONE`], opens for good where one has
 //! `z < −GATE_Z`, and stays open after [`GATE_PROBES`] undecided readings (the render was asked
-//! to guide). A closed gate ends the training, and the final iteration samples with Phong
+//! to guide). Where the render discards its training images (path reuse), what closes the
+//! gate is `z_m = ln(e_probe/(m·e_guided))/s` with the margin `m =` [`DISCARDED_MARGIN`]: the
+//! guide must be ahead by `1/m` to repay a training thrown away; what opens it is still `z`. A closed gate ends the training, and the final iteration samples with Phong
 //! directions.
 //!
 //! **What the image keeps.** Every probe is an unbiased image of the pixel. Where the gate
@@ -72,6 +74,25 @@ pub const GATE_Z: f64 = 3.0;
 /// 0.70× of reuse4 at 10 s waiting for a second reading beyond [`GATE_Z`] (10 before), 0.84×
 /// closing at the first beyond 6.
 pub const GATE_Z_ALONE: f64 = 6.0;
+/// The margin a guide must clear where the render discards its training images (path reuse,
+/// `--training-images discard`): the gate closes on `ratio / margin` read against one, so it
+/// reads the guide as losing unless it is ahead of Phong directions by `1/margin` ≈ 1.11× per
+/// cost (it opens, as everywhere, where the guide is ahead beyond the noise at all: a margin
+/// there delayed the Cornell box's opening to the third probe, 0.94× at 10 s). A
+/// discarded training is paid for by the final iteration alone (a third of the render's time,
+/// not half of it kept), and the readings are taken without path reuse, where the guide's gain
+/// is not the reused render's: in the night hall (192×108, seeds 7–18 at 10 s) the readings
+/// fall as the guide matures to 1.06–1.13 at 16 spp and 0.96–1.03 at 32 (a tie: four of
+/// twelve renders stayed undecided and guided), and guided+reuse4 without the gate reaches
+/// 0.69× of reuse4 at 10 s; on the Cornell box the readings at 8–16 spp are 0.73–0.92 and
+/// guided+reuse4 wins 1.29× there, on the gap 0.34–0.88 (it wins about 2×). 0.9 lies between
+/// the tie that loses and the Cornell box's lead. With it, auto's guided+reuse4 twin closes in
+/// the night hall at its first reading in 11 of 12 renders (seeds 7–18; z 6.2–14.8 against the
+/// margin), and auto reaches 0.92× of `--reuse 4` at 10 s (seeds 1–18 as nine pairs; 0.76×
+/// on seeds 7–18 before); the door's, the gap's and the Cornell box's gates decide as before
+/// (seeds 1–8, 1–6, 1–2), their highest first reading against the margin 4.2 (the gap's
+/// immature guide, 1.43 at z 3.3), the lamp's at 256×192 with `--reuse 4` opening at 4–8 spp.
+pub const DISCARDED_MARGIN: f64 = 0.9;
 /// The half-width in pixels of the box that averages the reading's denominator.
 pub const GATE_BLUR: usize = 4;
 
@@ -82,8 +103,11 @@ pub struct GateReading {
     pub spp: u64,
     /// The probe's efficiency over the guided iteration's, `e_probe/e_guided`.
     pub ratio: f64,
-    /// `ln(ratio)` over its standard error.
+    /// `ln(ratio)` over its standard error: below `−`[`GATE_Z`] the gate opens.
     pub z: f64,
+    /// `ln(ratio / margin)` over the same standard error (the margin: one, or
+    /// [`DISCARDED_MARGIN`]): what closes the gate.
+    pub z_margin: f64,
 }
 
 /// What the gate decided.
@@ -106,6 +130,9 @@ pub struct Gate {
     pub last: Option<GateReading>,
     /// The verdict after the last reading.
     pub verdict: Verdict,
+    /// What the probe's efficiency over the guide's is tested against: one, or
+    /// [`DISCARDED_MARGIN`] where the training images are discarded.
+    pub margin: f64,
 }
 
 impl Default for Gate {
@@ -114,11 +141,22 @@ impl Default for Gate {
             readings: 0,
             last: None,
             verdict: Verdict::Undecided,
+            margin: 1.0,
         }
     }
 }
 
 impl Gate {
+    /// The gate of a render that keeps its training images (`keeps`), or discards them and
+    /// asks the guide to clear [`DISCARDED_MARGIN`].
+    pub fn new(keeps: bool) -> Self {
+        let margin = if keeps { 1.0 } else { DISCARDED_MARGIN };
+        Gate {
+            margin,
+            ..Gate::default()
+        }
+    }
+
     /// Whether training iteration `k` over `pixels` pixels is followed by a probe.
     pub fn probes_at(&self, k: u32, pixels: u64) -> bool {
         self.verdict == Verdict::Undecided
@@ -156,6 +194,7 @@ impl Gate {
         }
         let s = ((s2 / n - (s1 / n).powi(2)).max(0.0) / n).sqrt();
         let z = ratio.ln() / s;
+        let z_margin = (ratio / self.margin).ln() / s;
         self.readings += 1;
         self.verdict = if z.is_nan() {
             // a black image (no variance in either) or no pixel read: nothing to gain
@@ -164,7 +203,9 @@ impl Gate {
             } else {
                 Verdict::Open
             }
-        } else if z > GATE_Z_ALONE || (z > GATE_Z && self.last.is_some_and(|r| r.z > GATE_Z)) {
+        } else if z_margin > GATE_Z_ALONE
+            || (z_margin > GATE_Z && self.last.is_some_and(|r| r.z_margin > GATE_Z))
+        {
             Verdict::Closed
         } else if z < -GATE_Z || self.readings >= GATE_PROBES {
             Verdict::Open
@@ -175,6 +216,7 @@ impl Gate {
             spp: 1 << k,
             ratio,
             z,
+            z_margin,
         });
     }
 
@@ -188,11 +230,16 @@ impl Gate {
         };
         match self.last {
             Some(r) => format!(
-                "{verdict} at {} spp: Phong directions {:.2}x as efficient as the guide, z {:.1} \
-                 ({} probe{})",
+                "{verdict} at {} spp: Phong directions {:.2}x as efficient as the guide, z {:.1}\
+                 {} ({} probe{})",
                 r.spp,
                 r.ratio,
                 r.z,
+                if self.margin == 1.0 {
+                    String::new()
+                } else {
+                    format!(" ({:.1} over {:.2}x)", r.z_margin, self.margin)
+                },
                 self.readings,
                 if self.readings == 1 { "" } else { "s" }
             ),
@@ -296,6 +343,52 @@ mod tests {
         let mut gate = Gate::default();
         gate.read(first, (&black, 4.0), (&black, 4.0), w as usize);
         assert!(gate.closed(), "{gate:?}");
+    }
+
+    /// [`DISCARDED_MARGIN`]: where the training is discarded, a probe that ties with the guide
+    /// (ratio 1, which leaves [`Gate::default`] undecided at z ≈ 0) reads
+    /// `ln(1/0.9)/s` against the margin, here beyond [`GATE_Z_ALONE`]: closed at once; a
+    /// guide 1.5× ahead still opens it, and one 1.05× ahead, within the margin, closes it
+    /// (where the training is kept it opens); the record names the margin.
+    #[test]
+    fn a_discarded_training_asks_the_guide_to_clear_a_margin() {
+        let (w, h) = (64, 32);
+        let pixels = (w * h) as u64;
+        let d = |i: usize| [0.5, 0.6, 0.7, 0.9][i % 4];
+        let guided = image(w, h, d);
+        let read = |keeps: bool, ratio: f64| {
+            // the probe's variance for `ratio`: e_p/e_g = V_g·c_g/(V_p·c_p)
+            let scale = (GUIDED_RAY_COST / ratio).sqrt();
+            let probe = image(w, h, move |i| scale * d(i + 1));
+            let mut gate = Gate::new(keeps);
+            let first = (GATE_PATHS / pixels).trailing_zeros();
+            gate.read(first, (&guided, 4.0), (&probe, 4.0), w as usize);
+            gate
+        };
+        let (kept, discarded) = (read(true, 1.0), read(false, 1.0));
+        assert_eq!(kept.verdict, Verdict::Undecided, "{kept:?}");
+        assert!(kept.last.unwrap().z.abs() < 1e-3, "{kept:?}");
+        assert!(discarded.closed(), "{discarded:?}");
+        let (rk, rd) = (kept.last.unwrap(), discarded.last.unwrap());
+        assert!((rd.ratio / rk.ratio - 1.0).abs() < 1e-9, "{rk:?} {rd:?}");
+        assert!(
+            rd.z_margin > GATE_Z_ALONE && (rd.z - rk.z).abs() < 1e-9,
+            "{rd:?}"
+        );
+        assert!(
+            discarded.record().contains("over 0.90x"),
+            "{}",
+            discarded.record()
+        );
+        assert!(!kept.record().contains("over"), "{}", kept.record());
+        assert_eq!(read(false, 1.0 / 1.5).verdict, Verdict::Open);
+        // 1.05× ahead: a gain without the margin, a loss within it (these images' z is sharp:
+        // beyond GATE_Z both ways, and closing goes first)
+        let within = read(false, 1.0 / 1.05);
+        let r = within.last.unwrap();
+        assert!(r.z < -GATE_Z && r.z_margin > GATE_Z_ALONE, "{r:?}");
+        assert!(within.closed(), "{within:?}");
+        assert_eq!(read(true, 1.0 / 1.05).verdict, Verdict::Open);
     }
 
     /// The denominator's box: a probe that meets a rare bright path (one pixel in 9, on a

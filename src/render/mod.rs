@@ -393,7 +393,7 @@ pub fn render_passes_with<F: SamplerFactory>(
         };
         let tree = (guided && learned.is_none()).then(|| {
             let budget = TrainingBudget::of_render(settings, plan);
-            let gate = gates(settings, plan).then(gate::Gate::default);
+            let gate = gates(settings, plan).then(|| gate::Gate::new(kept.is_some()));
             trainer.train(start, budget, &mut stats, kept.as_mut(), gate)
         });
         let tree = learned.map(|l| &l.tree).or(tree.as_ref());
