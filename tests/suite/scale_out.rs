@@ -330,12 +330,40 @@ fn signalled_render(output: &Path, signals: &[&str]) -> Output {
     )
 }
 
-/// Run vrpt with `args` in the background for 1.5 s, send it `signals`, and wait for it to end:
-/// within 30 s (the render stops within a batch, about 0.25 s, and a write), or the process is
-/// killed and the test fails (instead of hanging with it).
+/// Run vrpt with `args` in the background for 1.5 s and at least 0.3 s of its CPU time, send it
+/// `signals`, and wait for it to end: within 30 s (the render stops within a batch, about
+/// 0.25 s, and a write), or the process is killed and the test fails (instead of hanging with
+/// it). The CPU time: on a machine loaded by the other tests vrpt once started so late that the
+/// signals met its first batch, of one sample, which ended and wrote the image between a
+/// SIGTERM and the SIGINT after it.
 #[cfg(unix)]
 fn signalled(args: &[&str], signals: &[&str]) -> Output {
     signalled_timed(args, signals).0
+}
+
+/// Wait (at most 20 s) until process `pid` has used `seconds` of CPU time, read from
+/// `/proc/PID/stat` (user and system time, fields 14 and 15, in clock ticks of 1/100 s); where
+/// there is no `/proc` it returns at once.
+#[cfg(unix)]
+fn wait_for_cpu(pid: u32, seconds: f64) {
+    let t = Instant::now();
+    while t.elapsed() < Duration::from_secs(20) {
+        let Ok(stat) = std::fs::read_to_string(format!("/proc/{pid}/stat")) else {
+            return;
+        };
+        // the fields after the command's name, which is in parentheses and may hold spaces
+        let rest = stat.rsplit_once(')').map_or("", |(_, r)| r);
+        let ticks: u64 = rest
+            .split_whitespace()
+            .skip(11)
+            .take(2)
+            .filter_map(|f| f.parse::<u64>().ok())
+            .sum();
+        if ticks as f64 / 100.0 >= seconds {
+            return;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
 }
 
 /// [`signalled`], and the time from the signals to the exit.
@@ -348,6 +376,7 @@ fn signalled_timed(args: &[&str], signals: &[&str]) -> (Output, Duration) {
         .spawn()
         .expect("start vrpt");
     std::thread::sleep(Duration::from_millis(1500));
+    wait_for_cpu(child.id(), 0.3);
     let kills: Vec<String> = signals
         .iter()
         .map(|s| format!("kill -{s} {}", child.id()))
