@@ -32,8 +32,8 @@
 //! `z < −GATE_Z`, and stays open after [`GATE_PROBES`] undecided readings (the render was asked
 //! to guide). Where the render discards its training images (path reuse), what closes the
 //! gate is `z_m = ln(e_probe/(m·e_guided))/s` with the margin `m =` [`DISCARDED_MARGIN`]: the
-//! guide must be ahead by `1/m` to repay a training thrown away; what opens it is still `z`. A closed gate ends the training, and the final iteration samples with Phong
-//! directions.
+//! guide must be ahead by `1/m` to repay a training thrown away; what opens it is still `z`.
+//! A closed gate ends the training, and the final iteration samples with Phong directions.
 //!
 //! **What the image keeps.** Every probe is an unbiased image of the pixel. Where the gate
 //! closes, the probes are kept with the training iterations and combined with the final
@@ -90,7 +90,7 @@ pub const GATE_Z_ALONE: f64 = 6.0;
 /// the night hall at its first reading in 11 of 12 renders (seeds 7–18; z 6.2–14.8 against the
 /// margin), and auto reaches 0.92× of `--reuse 4` at 10 s (seeds 1–18 as nine pairs; 0.76×
 /// on seeds 7–18 before); the door's, the gap's and the Cornell box's gates decide as before
-/// (seeds 1–8, 1–6, 1–2), their highest first reading against the margin 4.2 (the gap's
+/// (seeds 1–2, 1–6, 1–8), their highest first reading against the margin 4.2 (the gap's
 /// immature guide, 1.43 at z 3.3), the lamp's at 256×192 with `--reuse 4` opening at 4–8 spp.
 pub const DISCARDED_MARGIN: f64 = 0.9;
 /// The half-width in pixels of the box that averages the reading's denominator.
