@@ -280,6 +280,25 @@ mod tests {
         IterationImage::of(&f)
     }
 
+    /// The two tests' images: 64 × 32 pixels (2048: the first probe at 64 spp, 2¹⁷ paths).
+    const W: u32 = 64;
+    const H: u32 = 32;
+    const PIXELS: u64 = (W * H) as u64;
+
+    /// A pixel's spread: 0.5, 0.6, 0.7 or 0.9 by pixel.
+    fn spread(i: usize) -> f64 {
+        [0.5, 0.6, 0.7, 0.9][i % 4]
+    }
+
+    /// The guided iteration's image, and a probe's: the spreads shifted by one pixel (so the
+    /// paired terms differ) and scaled by `scale`.
+    fn guided_and_probe(scale: f64) -> (IterationImage, IterationImage) {
+        (
+            image(W, H, spread),
+            image(W, H, move |i| scale * spread(i + 1)),
+        )
+    }
+
     /// The rule of the module doc on images whose efficiencies are known. The pixels' spreads
     /// differ (`d` of 0.5, 0.6, 0.7 or 0.9 by pixel, the probe's pattern shifted by one pixel, so
     /// the paired terms differ and the standard error is not zero; each value is as frequent
@@ -290,16 +309,12 @@ mod tests {
     /// then open); black images close it.
     #[test]
     fn the_gate_closes_where_the_guide_loses_and_opens_where_it_wins() {
-        let (w, h) = (64, 32);
-        let pixels = (w * h) as u64;
-        let d = |i: usize| [0.5, 0.6, 0.7, 0.9][i % 4];
-        let guided = image(w, h, d);
-        let probe = |scale: f64| image(w, h, move |i| scale * d(i + 1));
+        let (w, h, pixels) = (W, H, PIXELS);
         let read = |gate: &mut Gate, scale: f64, k: u32| {
             assert!(gate.probes_at(k, pixels), "{gate:?} at {k}");
-            gate.read(k, (&guided, 4.0), (&probe(scale), 4.0), w as usize);
+            let (guided, probe) = guided_and_probe(scale);
+            gate.read(k, (&guided, 4.0), (&probe, 4.0), w as usize);
         };
-        // 2048 pixels: the first probe at 64 spp (2¹⁷ paths)
         let first = (GATE_PATHS / pixels).trailing_zeros();
         assert!(!Gate::default().probes_at(first - 1, pixels));
 
@@ -352,17 +367,12 @@ mod tests {
     /// (where the training is kept it opens); the record names the margin.
     #[test]
     fn a_discarded_training_asks_the_guide_to_clear_a_margin() {
-        let (w, h) = (64, 32);
-        let pixels = (w * h) as u64;
-        let d = |i: usize| [0.5, 0.6, 0.7, 0.9][i % 4];
-        let guided = image(w, h, d);
         let read = |keeps: bool, ratio: f64| {
             // the probe's variance for `ratio`: e_p/e_g = V_g·c_g/(V_p·c_p)
-            let scale = (GUIDED_RAY_COST / ratio).sqrt();
-            let probe = image(w, h, move |i| scale * d(i + 1));
+            let (guided, probe) = guided_and_probe((GUIDED_RAY_COST / ratio).sqrt());
             let mut gate = Gate::new(keeps);
-            let first = (GATE_PATHS / pixels).trailing_zeros();
-            gate.read(first, (&guided, 4.0), (&probe, 4.0), w as usize);
+            let first = (GATE_PATHS / PIXELS).trailing_zeros();
+            gate.read(first, (&guided, 4.0), (&probe, 4.0), W as usize);
             gate
         };
         let (kept, discarded) = (read(true, 1.0), read(false, 1.0));
