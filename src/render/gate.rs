@@ -110,6 +110,29 @@ pub struct GateReading {
     pub z_margin: f64,
 }
 
+/// The first training iteration (`2^k` spp) a render of `pixels` pixels probes: the first
+/// from [`GATE_FIRST`] of at least [`GATE_PATHS`] paths ([`Gate::probes_at`]).
+pub fn first_probe(pixels: u64) -> u32 {
+    (GATE_FIRST..31)
+        .find(|&k| (1u64 << k).saturating_mul(pixels) >= GATE_PATHS)
+        .unwrap_or(31)
+}
+
+/// Whether the training of a guided render of `pixels` pixels under `budget` reaches its
+/// gate's first reading ([`first_probe`]): its iterations of 1, 2, …, `2^k` spp, `2^(k+1) − 1`
+/// in all, within the budget's spp, and, at `per_spp` seconds per training spp of the image
+/// where it is known, within its time (the training starts an iteration where the time so far
+/// and twice the last one's fit, about the same sum). Where it does not, the gate never reads
+/// and the guide renders the image unjudged.
+pub fn reads_within(budget: super::TrainingBudget, pixels: u64, per_spp: Option<f64>) -> bool {
+    let spp = (2u64 << first_probe(pixels)) - 1;
+    let time = match (budget.time, per_spp) {
+        (Some(t), Some(s)) => s * spp as f64 <= t.as_secs_f64(),
+        _ => true,
+    };
+    spp <= budget.spp && time
+}
+
 /// What the gate decided.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Verdict {
@@ -437,5 +460,34 @@ mod tests {
         );
         let own = ratio(0);
         assert!(own < 5.0, "{own}");
+    }
+
+    /// The first reading comes at the first iteration [`Gate::probes_at`] probes, and the
+    /// training reaches it only where its spp (and, at a known speed, its time) holds the
+    /// iterations up to it: the night hall at its default (192×108, 16 spp: a budget of 8)
+    /// first reads at 8 spp, after 15 of training, so not; Mitsuba's box (256², 16 spp) at 4,
+    /// after 7, so it does.
+    #[test]
+    fn the_training_reaches_the_first_reading_or_not() {
+        for pixels in [1u64, 96 * 64, 192 * 108, 256 * 256, 1 << 17, 1920 * 1080] {
+            let k = first_probe(pixels);
+            assert!(Gate::default().probes_at(k, pixels), "{pixels}");
+            assert!(k == GATE_FIRST || !Gate::default().probes_at(k - 1, pixels));
+        }
+        assert_eq!(first_probe(192 * 108), 3);
+        assert_eq!(first_probe(256 * 256), 2);
+        let budget = |spp: u64, secs: Option<f64>| super::super::TrainingBudget {
+            spp,
+            time: secs.map(std::time::Duration::from_secs_f64),
+        };
+        assert!(!reads_within(budget(8, None), 192 * 108, None));
+        assert!(reads_within(budget(15, None), 192 * 108, None));
+        assert!(reads_within(budget(8, None), 256 * 256, None));
+        // under a time limit, at 0.02 s a training spp: 15 spp take 0.3 s
+        let fast = Some(0.02);
+        assert!(reads_within(budget(1 << 20, Some(3.3)), 192 * 108, fast));
+        assert!(!reads_within(budget(1 << 20, Some(0.29)), 192 * 108, fast));
+        // with no speed known (no time limit) the spp decide
+        assert!(reads_within(budget(15, Some(0.01)), 192 * 108, None));
     }
 }

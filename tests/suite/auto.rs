@@ -101,8 +101,9 @@ fn auto_under_a_time_limit_chooses_by_wall_time() {
 /// first, `independent` never does (MIS is 5–6× as efficient by the pilots, above), so the
 /// guided candidate is not piloted, the table and the metadata say so, and mis renders; with
 /// `independent` first, mis beats it (z 7–21), so mis's guided twin renders without a pilot
-/// (its own guide, its gate), or, where the list has no twin of mis, the guided candidate is
-/// piloted after the unguided ones. The default candidates are mis, path reuse, and both with
+/// (its own guide, its gate) where its training reaches its gate's first reading, else mis
+/// renders; where the list has no twin of mis, the guided candidate is piloted after the
+/// unguided ones. The default candidates are mis, path reuse, and both with
 /// guided directions.
 #[test]
 fn auto_pilots_a_guided_candidate_only_where_an_unguided_one_won() {
@@ -128,8 +129,17 @@ fn auto_pilots_a_guided_candidate_only_where_an_unguided_one_won() {
             record.contains(&format!("(not piloted: {guided})")),
             "{record}"
         );
-        let switched =
-            render(&[&size[..], &args, &[&format!("independent,mis,{guided}")]].concat());
+        // at 48×36 and 64 spp the twin's gate would first read at 128 spp, after a training of
+        // 255 (it has 32): mis renders, unjudged guiding does not
+        let list = format!("independent,mis,{guided}");
+        let unread = render(&[&size[..], &args, &[&list]].concat());
+        let choice = unread.auto.as_ref().expect("the pilots' choice");
+        assert_eq!(choice.stage, GuidedStage::Unread, "{}", choice.table());
+        assert_eq!(choice.candidate.to_string(), "mis", "{}", choice.table());
+        assert!(choice.table().contains("before its gate's first reading"));
+        // at 128×128 and 32 spp it reads at 8 spp, after 15 of its 16
+        let reads = ["--width", "128", "--height", "128", "--spp", "32"];
+        let switched = render(&[&reads[..], &args, &[&list]].concat());
         let choice = switched.auto.as_ref().expect("the pilots' choice");
         let names: Vec<String> = (choice.rows.iter())
             .map(|r| r.candidate.to_string())
@@ -140,7 +150,7 @@ fn auto_pilots_a_guided_candidate_only_where_an_unguided_one_won() {
         assert!(choice.unpiloted.is_empty() && choice.guide.is_none());
         assert_eq!(switched.meta.strategy.to_string(), guided);
         // the twin's image is `--directions guided`'s, bit for bit
-        let own = render(&[&size[..], &["--seed", &seed, "--directions", "guided"]].concat());
+        let own = render(&[&reads[..], &["--seed", &seed, "--directions", "guided"]].concat());
         assert_eq!(switched.film.mean_image(), own.film.mean_image());
         // without mis's twin in the list, the guided candidate is piloted
         let other = format!("{guided}+reuse4");
@@ -223,7 +233,8 @@ fn caustic_light_is_counted_where_it_comes_through_glass() {
 /// it cannot beat it (z = 0): on the Cornell box (no glass) the guided candidate is then not
 /// piloted. On the lamp behind its glass shade, the caustics its only reason: where the list
 /// holds mis's guided twin (`stratified+guided+mis`), the twin is rendered without a pilot (its
-/// own guide, its gate) and chosen with no pilot at all; where it holds only another guided
+/// own guide, its gate) and chosen with no pilot at all, where its training reaches its gate's
+/// first reading (else the unguided candidates are piloted and mis renders); where it holds only another guided
 /// candidate, that one is piloted after the unguided ones; the table and the metadata say
 /// which. (`independent` would not do as the other: on
 /// the lamp, where no light sample gets through the shade, its BSDF-only paths read 2.5× as
@@ -253,7 +264,20 @@ fn auto_tries_a_guided_candidate_where_the_light_is_caustic() {
     );
 
     let lamp_path = common::shipped_path("lamp");
-    let (lamp, record, strategy) = run(&lamp_path, &twin_list);
+    // at 32×32 and 64 spp the twin's gate would first read at 128 spp (a training of 255, with
+    // 32 to spend): the unguided candidates are piloted and mis renders
+    let (lamp, _, strategy) = run(&lamp_path, &twin_list);
+    assert_eq!(lamp.stage, GuidedStage::Unread, "{}", lamp.table());
+    assert_eq!(lamp.rows.len(), 2, "{}", lamp.table());
+    assert_eq!(strategy.to_string(), "mis");
+    // at 128×128 and 32 spp it reads at 8 spp, after 15 of its 16
+    let reads = ["--width", "128", "--height", "128", "--spp", "32"];
+    let out = render_scene(&lamp_path, &[&reads[..], &args, &[&twin_list]].concat());
+    let (lamp, record, strategy) = (
+        out.auto.clone().expect("the pilots' choice"),
+        out.meta.auto.clone().unwrap(),
+        out.meta.strategy,
+    );
     assert!(lamp.rows.is_empty(), "no pilot: {}", lamp.table());
     assert!(lamp.caustic >= CAUSTIC_GATE, "{}", lamp.table());
     assert_eq!(lamp.stage, GuidedStage::Rendered, "{}", lamp.table());

@@ -113,7 +113,11 @@
 //!   the twin piloted with a handed guide, reaching 0.97–1.04× of `--directions guided --reuse
 //!   4`; on the Cornell box (guiding adds nothing) 0.97×; in the night hall, where the guide
 //!   loses 1.2× by its gate's first reading, 0.96× (with its gate closing at that reading: see
-//!   [`super::gate::GATE_Z_ALONE`]; 0.82× when it waited for a second).
+//!   [`super::gate::GATE_Z_ALONE`]; 0.82× when it waited for a second). The twin renders only
+//!   where its training reaches its gate's first reading, else the unguided choice does
+//!   ([`GuidedStage::Unread`], `stage.rs`): at the night hall's default 16 spp the twin rendered
+//!   guided without a reading and auto reached 0.67× the efficiency of `--reuse 4`; with
+//!   the rule it renders `--reuse 4`'s image.
 //! - **Caustics: the first candidate's twin, no pilot.** Next-event estimation
 //!   never reaches a caustic; a guide is what finds it. Path reuse shares the light samples'
 //!   connections between pixels, and a caustic comes by no connection: with guided directions
@@ -456,6 +460,8 @@ pub fn choose(
     let gates = Gates {
         caustic: probe.caustic >= CAUSTIC_GATE,
         direct: probe.indirect < INDIRECT_GATE,
+        per_spp: (plan.time_limit).map(|_| probe.seconds / probe.spp as f64 / pilots.share),
+        start,
     };
     let (ks, done, stage) = pilot_early_then_full(&mut pilots, candidates, spp, gates)?;
     let rows = shared_denominator(pilots.width, &done);
@@ -494,83 +500,6 @@ pub fn choose(
     })
 }
 
-/// What the gates read from the probe ([`PROBE_SPP`]): whether enough of the first candidate's
-/// light was caustic ([`CAUSTIC_GATE`]), and whether too little was indirect ([`INDIRECT_GATE`]).
-#[derive(Clone, Copy, Debug)]
-struct Gates {
-    caustic: bool,
-    direct: bool,
-}
-
-/// The pilots of `candidates` at `spp`, staged (the module doc): where the probe's light is
-/// caustic enough and the first's guided twin is listed, none (the twin renders); else the
-/// first and the other unguided ones, and where one of them beat the first or the light is
-/// caustic, no more where the guided twin of their choice is listed (it renders), else every
-/// guided candidate. Where too little of the probe's light is indirect, no candidate with path
-/// reuse is piloted; where no candidate but the first is left to pilot, none is (the first is
-/// chosen). The candidates piloted, their pilots and what became of the guided ones.
-fn pilot_staged(
-    pilots: &mut Pilots,
-    candidates: &[Candidate],
-    spp: u32,
-    gates: Gates,
-) -> Result<(Vec<usize>, Vec<pilot::Pilot>, GuidedStage)> {
-    let n = candidates.len();
-    let guided = |k: usize| k > 0 && candidates[k].strategy.directions == Directions::Guided;
-    let staged = (1..n).any(|k| !guided(k)) && (1..n).any(guided);
-    let twin_of = |c: Candidate| (1..n).find(|&k| guided(k) && candidates[k] == c.guided());
-    let (mut ks, mut done) = (Vec::new(), Vec::new());
-    if staged && gates.caustic && twin_of(candidates[0]).is_some() {
-        return Ok((ks, done, GuidedStage::Rendered));
-    }
-    let shares = |k: &usize| !(gates.direct && candidates[*k].reuse > 1);
-    let width = pilots.width;
-    let mut pilot = |ks: &mut Vec<usize>, done: &mut Vec<pilot::Pilot>, k: usize| {
-        if ks.is_empty() && k > 0 {
-            done.push(pilots.run(0, spp)?);
-            ks.push(0);
-        }
-        done.push(pilots.run(k, spp)?);
-        ks.push(k);
-        Ok::<_, crate::error::Error>(())
-    };
-    for k in (1..n).filter(|&k| !staged || !guided(k)).filter(shares) {
-        pilot(&mut ks, &mut done, k)?;
-    }
-    let winner = match done.is_empty() {
-        true => candidates[0],
-        false => done[decide(&shared_denominator(width, &done)).0].candidate,
-    };
-    if !staged || !(gates.caustic || winner != candidates[0]) {
-        return Ok((ks, done, GuidedStage::Shut));
-    }
-    if twin_of(winner).is_some() {
-        return Ok((ks, done, GuidedStage::Rendered));
-    }
-    for k in (1..n).filter(|&k| guided(k)).filter(shares) {
-        pilot(&mut ks, &mut done, k)?;
-    }
-    Ok((ks, done, GuidedStage::Piloted))
-}
-
-/// What became of the guided candidates of a list that stages them (the module doc).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum GuidedStage {
-    /// None came in after the unguided pilots: no unguided candidate beat the first, and too
-    /// little of the first's light was caustic. (A list that does not stage its guided
-    /// candidates, one with no unguided candidate but the first, pilots them with the rest.)
-    Shut,
-    /// Piloted after the unguided ones, every guided candidate (its guide trained first on the
-    /// pilots' strip): the unguided pilots' choice has no guided twin in the list.
-    Piloted,
-    /// The guided twin ([`Candidate::guided`]) of the unguided pilots' choice (of the first
-    /// alone, where its light is caustic enough: [`CAUSTIC_GATE`]) is listed: it is rendered
-    /// without a pilot, its guide trained over the whole image as `--directions guided` trains
-    /// it, and its gate ([`super::gate`]) rendering the rest with Phong directions where the
-    /// guide loses.
-    Rendered,
-}
-
 impl Choice {
     /// The settings of the render after the pilots: `settings` with the chosen candidate's
     /// strategy, reuse and roulette.
@@ -593,8 +522,11 @@ impl Choice {
 mod candidate;
 mod pilot;
 mod report;
+mod stage;
 pub use candidate::{default_candidates, Candidate, Candidates, AUTO_REUSE};
 use pilot::{shared_denominator, Pilots};
+use stage::{pilot_staged, Gates};
+pub use stage::{GuidedStage, TRAINING_SAMPLE_COST};
 
 #[cfg(test)]
 mod tests;

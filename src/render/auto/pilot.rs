@@ -75,6 +75,27 @@ impl<'a> Pilots<'a> {
         })
     }
 
+    /// Whether guided candidate `twin`, rendered after pilots that took `elapsed`, would
+    /// read its gate before its training ends ([`crate::render::gate::reads_within`], at
+    /// `per_spp` seconds a training spp of the image under a time limit); a render that does
+    /// not gate (`--guide-gate off`) reads nothing and is asked for as it is.
+    pub(super) fn twin_reads(
+        &self,
+        twin: Candidate,
+        per_spp: Option<f64>,
+        elapsed: Duration,
+    ) -> bool {
+        let settings = twin.settings(self.settings);
+        let plan = PassPlan {
+            time_limit: (self.plan.time_limit).map(|t| t.saturating_sub(elapsed)),
+            ..self.plan.clone()
+        };
+        let pixels = settings.width as u64 * settings.height as u64;
+        let budget = TrainingBudget::of_render(&settings, &plan);
+        !crate::render::gates(&settings, &plan)
+            || crate::render::gate::reads_within(budget, pixels, per_spp)
+    }
+
     /// The pilot of candidate `k` at `spp` samples per pixel (all replicates).
     pub(super) fn run(&mut self, k: usize, spp: u32) -> Result<Pilot> {
         self.run_as(k, spp, PILOT_REPLICATES)

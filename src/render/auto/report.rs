@@ -105,6 +105,10 @@ impl Choice {
             GuidedStage::Shut => format!("guided, no unguided candidate beat {first}, {caustic}"),
             GuidedStage::Piloted => format!("guided, not the guided twin of {chosen}"),
             GuidedStage::Rendered => format!("{chosen}'s guided twin renders instead"),
+            GuidedStage::Unread => format!(
+                "the guided twin of {chosen}: its training would end before its gate's first \
+                 reading"
+            ),
         };
         if self.stage == GuidedStage::Rendered {
             s += &format!(
