@@ -105,8 +105,8 @@ pub enum GuidedStage {
     /// The guided twin ([`Candidate::guided`]) of the unguided pilots' choice (of the first
     /// alone, where its light is caustic enough: [`CAUSTIC_GATE`]) is listed: it is rendered
     /// without a pilot, its guide trained over the image as `--directions guided` trains
-    /// it, and its gate ([`super::gate`]) rendering the rest with Phong directions where the
-    /// guide loses.
+    /// it, and its gate ([`crate::render::gate`]) rendering the rest with Phong directions
+    /// where the guide loses.
     Rendered,
     /// The guided twin of the unguided pilots' choice is listed, but its training would end
     /// before its gate's first reading (this file's module doc): the unguided choice renders.
