@@ -156,6 +156,9 @@ pub struct Gate {
     /// What the probe's efficiency over the guide's is tested against: one, or
     /// [`DISCARDED_MARGIN`] where the training images are discarded.
     pub margin: f64,
+    /// The iteration of the first probe ([`first_probe`]; `2^first` spp), set by the training
+    /// that gates: a gate with no reading says where its first would have come.
+    pub first: u32,
 }
 
 impl Default for Gate {
@@ -165,6 +168,7 @@ impl Default for Gate {
             last: None,
             verdict: Verdict::Undecided,
             margin: 1.0,
+            first: GATE_FIRST,
         }
     }
 }
@@ -244,7 +248,9 @@ impl Gate {
     }
 
     /// The verdict and the last reading, as the metadata key `guide_gate` holds them:
-    /// `closed at 8 spp: Phong directions 1.79x as efficient as the guide, z 4.2 (1 probe)`.
+    /// `closed at 8 spp: Phong directions 1.79x as efficient as the guide, z 4.2 (1 probe)`;
+    /// where the training ended before the first probe, `unread (…)`: the guide rendered the
+    /// image unjudged.
     pub fn record(&self) -> String {
         let verdict = match self.verdict {
             Verdict::Closed => "closed",
@@ -266,7 +272,10 @@ impl Gate {
                 self.readings,
                 if self.readings == 1 { "" } else { "s" }
             ),
-            None => verdict.to_string(),
+            None => format!(
+                "unread (the training ended before its first probe, at {} spp)",
+                1u64 << self.first
+            ),
         }
     }
 

@@ -82,7 +82,8 @@ pub struct GuideStats {
     /// The training iterations kept in the image (`None`: the image is the final iteration
     /// alone).
     pub combined: Option<super::Combination>,
-    /// The guide's gate, where it read a probe ([`super::gate`]).
+    /// The guide's gate, where the render gated ([`super::gate`]; with no reading where its
+    /// training ended before the first probe).
     pub gate: Option<super::gate::Gate>,
 }
 

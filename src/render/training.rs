@@ -114,6 +114,9 @@ impl<'a, F: SamplerFactory> Trainer<'a, F> {
         let mut tree = Guide::new(lo, hi);
         let mut g = GuideStats::default();
         let mut last = Duration::ZERO;
+        if let Some(gate) = gate.as_mut() {
+            gate.first = super::gate::first_probe(self.pixels());
+        }
         for k in 0u32..32 {
             let spp = 1u64 << k;
             if k > 0 {
@@ -166,7 +169,7 @@ impl<'a, F: SamplerFactory> Trainer<'a, F> {
             last = took;
         }
         g.training = start.elapsed();
-        g.gate = gate.filter(|g| g.readings > 0);
+        g.gate = gate;
         stats.guide = Some(g);
         tree
     }

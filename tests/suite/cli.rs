@@ -646,6 +646,22 @@ fn guided_renders_report_their_training_and_guide_shows_it() {
         "{record}"
     );
     assert!(err.contains(&format!("guiding: gate {record}")), "{err}");
+    // at 16 spp the training (8 spp) ends before the first probe (2¹⁷ paths: 32 spp at
+    // 64×64), and the record says the guide rendered unjudged
+    let mut a = vec!["render", scene.to_str().unwrap(), "--directions", "guided"];
+    a.extend_from_slice(&["--width", "64", "--height", "64", "--spp", "16", "--stats"]);
+    a.extend_from_slice(&["-o", exr.to_str().unwrap()]);
+    let out = vrpt(&a);
+    let err = String::from_utf8_lossy(&out.stderr).to_string();
+    let meta =
+        vrpt::output::RenderMetadata::require(&vrpt::image_io::read_exr(&exr).unwrap(), &exr)
+            .unwrap();
+    let unread = "unread (the training ended before its first probe, at 32 spp)";
+    assert_eq!(meta.guide_gate.as_deref(), Some(unread));
+    assert!(
+        err.contains(&format!("guiding: gate {unread}; the guide kept")),
+        "{err}"
+    );
     let (err, record) = gated(&["--guide-gate", "off"]);
     assert!(record.is_none() && !err.contains("guiding: gate"), "{err}");
     // ungated, the training images are kept all the same
