@@ -342,6 +342,13 @@ fn guide(c: &mut Criterion) {
                 .sum::<f32>()
         })
     });
+    g.bench_function("dir_to_canonical", |b| {
+        b.iter(|| {
+            (points.iter())
+                .map(|&(_, _, d)| dir_to_canonical(black_box(d)).y)
+                .sum::<f32>()
+        })
+    });
     g.bench_function("pdf_of_direction", |b| {
         b.iter(|| {
             at.iter()

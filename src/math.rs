@@ -1,4 +1,4 @@
-//! Small math helpers: an orthonormal frame about a normal, and integer hashing.
+//! Small math helpers: an orthonormal frame about a normal, integer hashing, and `atan2`.
 //!
 //! [`Frame`] turns world vectors into the local shading frame (z = normal) and back; it is built
 //! with the branchless construction of Duff et al. 2017 ("Building an orthonormal basis,
@@ -112,6 +112,55 @@ pub fn luminance(c: Vec3) -> f32 {
     c.dot(Vec3::new(0.2126, 0.7152, 0.0722))
 }
 
+/// Coefficients of `atan(t)/t ≈ Σ c_k t^(2k)` on `t ∈ [0, 1]`: a near-minimax fit (least
+/// squares at Chebyshev nodes, reweighted toward the largest error), absolute error 6e-9 in
+/// exact arithmetic, 1.0e-7 evaluated in `f32` (two ulps of π/4).
+const ATAN: [f32; 9] = [
+    0.999_999_9,
+    -0.333_326,
+    0.199_859_07,
+    -0.141_612_29,
+    0.104_989_46,
+    -0.072_348_58,
+    0.039_781_23,
+    -0.014_401_361,
+    0.002_456_725_3,
+];
+
+/// `atan2(y, x)` in `[−π, π]`, within 4e-7 rad of the exact value (libm's `atan2f`, the
+/// exact value rounded, is within 1.2e-7 at |φ| near π; 4e-7 is 6e-8 of the guide's
+/// canonical `φ/2π`, a sixteenth of its finest cell, 2⁻²⁰): the angle of the smaller of `|x|`,
+/// `|y|` over the larger by a polynomial (`ATAN`), then reflected into its octant, with no
+/// branch on the data. `(0, 0)` gives `±0`. The guide's mapping of each direction it
+/// evaluates or records takes one ([`crate::guiding::dir_to_canonical`]): with it the mapping
+/// runs 1.46× as fast as with `f32::atan2` (`cargo bench --bench sampling -- guide/`, 76 →
+/// 112 M/s; a direction's guide pdf 41 → 58 M/s; 2-core EPYC), and a guided render of
+/// Mitsuba's box 1.02× (1 thread, 16 spp, 6 of 6 seeds faster, 3.68 → 3.76 M rays/s).
+#[inline]
+pub fn atan2(y: f32, x: f32) -> f32 {
+    let (ax, ay) = (x.abs(), y.abs());
+    let (lo, hi) = (ax.min(ay), ax.max(ay));
+    // 0/0 is the one NaN: (0, 0) gives 0 over the least positive number
+    let t = lo / hi.max(f32::MIN_POSITIVE);
+    // Estrin's scheme: four independent pairs, then their combination by z², z⁴, z⁸, for a
+    // short chain of dependent operations (the guide's descent waits on this angle)
+    let z = t * t;
+    let (z2, c) = (z * z, &ATAN);
+    let z4 = z2 * z2;
+    let (p01, p23) = (c[0] + c[1] * z, c[2] + c[3] * z);
+    let (p45, p67) = (c[4] + c[5] * z, c[6] + c[7] * z);
+    let p = (p01 + p23 * z2) + (p45 + p67 * z2) * z4 + c[8] * (z4 * z4);
+    // the reflections `r → π/2 − r` and `r → π − r` as `c·a + (1 − 2c)·r` with `c` 0 or 1:
+    // no branch for the octant, random for the guide's directions (each `if` a misprediction
+    // half the time, which took more than the polynomial); with `c` 0, `r` is unchanged
+    let reflect = |r: f32, c: bool, a: f32| {
+        let c = c as u8 as f32;
+        c * a + (1.0 - 2.0 * c) * r
+    };
+    let r = reflect(p * t, ay > ax, std::f32::consts::FRAC_PI_2);
+    reflect(r, x < 0.0, std::f32::consts::PI).copysign(y)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -139,5 +188,36 @@ mod tests {
     fn unit_float_is_in_range() {
         assert_eq!(u64_to_unit_f32(0), 0.0);
         assert!(u64_to_unit_f32(u64::MAX) < 1.0);
+    }
+
+    /// [`atan2`] against the exact angle (f64) at every octant, the axes and the signed zeros:
+    /// within 4e-7 rad: the fit's 1.0e-7, f32 π's own 0.9e-7 and two roundings (the
+    /// reflection's, the polynomial's last) of up to 1.2e-7 each; the worst seen is 3.1e-7.
+    #[test]
+    fn atan2_is_within_four_tenths_of_a_microradian() {
+        let mut worst = 0.0f64;
+        let n = 20_000;
+        for i in 0..n {
+            let a = (i as f64 + 0.5) / n as f64 * std::f64::consts::TAU - std::f64::consts::PI;
+            for r in [1e-3f64, 0.7, 1.0, 3e4] {
+                let (y, x) = ((r * a.sin()) as f32, (r * a.cos()) as f32);
+                let exact = (y as f64).atan2(x as f64);
+                worst = worst.max((atan2(y, x) as f64 - exact).abs());
+            }
+        }
+        assert!(worst < 4e-7, "{worst}");
+        for (y, x) in [
+            (0.0f32, 1.0f32),
+            (1.0, 0.0),
+            (0.0, -1.0),
+            (-1.0, 0.0),
+            (1.0, 1.0),
+        ] {
+            let exact = (y as f64).atan2(x as f64);
+            assert!((atan2(y, x) as f64 - exact).abs() < 4e-7, "{y} {x}");
+        }
+        assert_eq!(atan2(0.0, 0.0).to_bits(), 0.0f32.to_bits());
+        assert_eq!(atan2(-0.0, 1.0).to_bits(), (-0.0f32).to_bits());
+        assert!((atan2(-1e-30, -1.0) + std::f32::consts::PI).abs() < 4e-7);
     }
 }

@@ -146,7 +146,7 @@ pub const MAX_QUAD_NODES: usize = 1 << 16;
 #[inline]
 pub fn dir_to_canonical(d: Vec3) -> Vec2 {
     let cos_theta = d.z.clamp(-1.0, 1.0);
-    let mut phi = d.y.atan2(d.x);
+    let mut phi = crate::math::atan2(d.y, d.x);
     if phi < 0.0 {
         phi += 2.0 * PI;
     }
