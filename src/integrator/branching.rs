@@ -96,7 +96,7 @@ impl<'a> Path<'a> {
         rays.mark(Phase::Shade);
         let lobe = bsdf.chooses_lobe(directions);
         let guided = directions == Directions::Guided;
-        let first_u = BounceSample::draw_needed(sampler, self.sample_lights, lobe, true, guided);
+        let first_u = BounceSample::draw_needed(sampler, self.light_values, lobe, true, guided);
         rays.mark(Phase::Sampler);
         let v = Vertex::new(self.scene, s, front, wo);
         let g = (self.guide).and_then(|t| GuideAt::for_image(t, s.p, bsdf.diffuse_share()));
@@ -129,7 +129,7 @@ impl<'a> Path<'a> {
                 let mut stream = IndependentSampler::new(hash_words(&key.map(u64::from)));
                 stream.start_pixel_sample(UVec2::ZERO, 0);
                 let u =
-                    BounceSample::draw_needed(&mut stream, self.sample_lights, lobe, true, guided);
+                    BounceSample::draw_needed(&mut stream, self.light_values, lobe, true, guided);
                 self.continuation(&at, &u, &mut stream, rays, stack, rrs)
             };
         }

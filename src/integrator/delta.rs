@@ -29,7 +29,10 @@ impl<'a> Path<'a> {
         let roulette = mixed && segment >= RR_START_BOUNCE;
         let u = BounceSample::draw_needed(
             sampler,
-            self.sample_lights && mixed,
+            match mixed {
+                true => self.light_values,
+                false => LightValues::None,
+            },
             mixed || lobe.chooses(),
             roulette,
             false,

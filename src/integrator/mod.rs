@@ -64,7 +64,7 @@ use crate::bsdf::{Bsdf, Directions, Specular};
 use crate::guiding::{Guide, GuideAt, Record};
 use crate::lights::{LightChoice, LightPoints, LightSampler, LightStrategy};
 use crate::math::{luminance, Frame};
-use crate::sampler::layout::BounceSample;
+use crate::sampler::layout::{BounceSample, LightValues};
 use crate::sampler::Sampler;
 use crate::scene::{Scene, SurfacePoint};
 use glam::Vec3;
@@ -307,6 +307,9 @@ struct Path<'a> {
     guide: Option<&'a Guide>,
     /// Whether vertices take a light sample (`nee` or `mis`, and the scene has a light).
     sample_lights: bool,
+    /// The light values a Phong vertex draws: none without light samples, and the choice only
+    /// where the chooser has more than one light to choose from.
+    light_values: LightValues,
 }
 
 impl<'a> Path<'a> {
@@ -314,10 +317,12 @@ impl<'a> Path<'a> {
         let lights = scene
             .lights
             .sampler(settings.light_points, settings.light_choice);
+        let sample_lights = settings.lights != LightStrategy::Bsdf && lights.any();
         Path {
             scene,
             settings,
-            sample_lights: settings.lights != LightStrategy::Bsdf && lights.any(),
+            sample_lights,
+            light_values: LightValues::of(sample_lights, lights.chooses()),
             lights,
             guide: guide.filter(|_| settings.directions == Directions::Guided),
         }
@@ -464,7 +469,7 @@ impl<'a> Path<'a> {
         // values this bounce cannot use are skipped, not drawn (the same image, fewer hashes)
         let u = BounceSample::draw_needed(
             sampler,
-            self.sample_lights,
+            self.light_values,
             bsdf.chooses_lobe(settings.directions),
             segment >= RR_START_BOUNCE,
             settings.directions == Directions::Guided,

@@ -174,6 +174,9 @@ pub struct Lights {
     uniform: Discrete,
     /// The environment's units in the tree choice (by power against all emitters).
     environment_units: u32,
+    /// Whether exactly one light (an emitter or the environment) has power: then every
+    /// chooser picks it whatever its `u` ([`LightSampler::chooses`]).
+    one: bool,
     /// The light BVH, built at its first use.
     tree: OnceLock<LightTree>,
 }
@@ -208,6 +211,7 @@ impl Lights {
             .collect();
         let emitter_power: f64 = power[..emitters.len()].iter().sum();
         let environment_units = Discrete::new(&[env_power, emitter_power])?.units(0);
+        let one = power.iter().filter(|&&p| p > 0.0).count() == 1;
         Ok(Lights {
             emitters,
             environment,
@@ -215,6 +219,7 @@ impl Lights {
             by_power: Discrete::new(&power)?,
             uniform: Discrete::new(&ones)?,
             environment_units,
+            one,
             tree: OnceLock::new(),
         })
     }

@@ -25,6 +25,15 @@ impl LightSampler<'_> {
         self.lights.any()
     }
 
+    /// Whether the light [`LightSampler::choose`] picks depends on its `u`: not where one light
+    /// has power and the chooser is a table (which passes over the lights of no power) or a
+    /// tree of one emitter (its one leaf takes the emitters' units, the environment none or
+    /// all). A path then skips the light-choice value, not drawn (`BounceSample::draw_needed`).
+    pub fn chooses(&self) -> bool {
+        !(self.lights.one
+            && (matches!(self.choice, Choice::Table(_)) || self.lights.emitters.len() == 1))
+    }
+
     /// The light chosen by `u` for a receiver at `p` with normal `n`, and its probability
     /// (exactly the frequency of this choice from `p`). `None`: nothing to choose from here.
     #[inline]

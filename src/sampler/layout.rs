@@ -59,6 +59,31 @@ impl CameraSample {
     }
 }
 
+/// Which light values a bounce draws ([`BounceSample::draw_needed`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LightValues {
+    /// None: the path takes no light sample (BSDF sampling only, or no light), or not at this
+    /// vertex (a mirror's or glass's).
+    None,
+    /// The point on the light (or the environment's direction), not the choice: one light
+    /// can be chosen, whatever the choice's value ([`crate::lights::LightSampler::chooses`]).
+    Point,
+    /// The light choice and the point.
+    ChoiceAndPoint,
+}
+
+impl LightValues {
+    /// The values a path draws that takes light samples (`sample`) from a chooser that
+    /// `chooses` between lights or not.
+    pub fn of(sample: bool, chooses: bool) -> LightValues {
+        match (sample, chooses) {
+            (false, _) => LightValues::None,
+            (true, false) => LightValues::Point,
+            (true, true) => LightValues::ChoiceAndPoint,
+        }
+    }
+}
+
 /// The numbers of one bounce.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BounceSample {
@@ -83,29 +108,41 @@ impl BounceSample {
     /// dimensions are skipped, not drawn, and read as zero: the layout stays the same.
     #[inline(always)]
     pub fn draw<S: Sampler>(s: &mut S, lights: bool) -> Self {
+        let lights = match lights {
+            true => LightValues::ChoiceAndPoint,
+            false => LightValues::None,
+        };
         Self::draw_needed(s, lights, true, true, false)
     }
 
-    /// [`BounceSample::draw`] that also skips the lobe choice when `lobe` is false (a BSDF of
-    /// one lobe) and the roulette value when `roulette` is false (a bounce before roulette
-    /// starts). A skipped dimension reads as zero and every other value is the one `draw` gives:
-    /// each sampler's value depends on the dimension's index only, and skipping keeps the index.
-    /// With `guided` it then draws [`GUIDE_DIMS`] (a guided render's layout; without, they are
-    /// not part of the layout and read as zero).
+    /// [`BounceSample::draw`] that draws the light values `lights` asks for (the light choice
+    /// only where the render's chooser has more than one light to pick from), skips the lobe
+    /// choice when `lobe` is false (a BSDF of one lobe) and the roulette value when `roulette`
+    /// is false (a bounce before roulette starts). A skipped dimension reads as zero and every
+    /// other value is the one `draw` gives: each sampler's value depends on the dimension's
+    /// index only, and skipping keeps the index. With `guided` it then draws [`GUIDE_DIMS`] (a
+    /// guided render's layout; without, they are not part of the layout and read as zero).
     #[inline(always)]
     pub fn draw_needed<S: Sampler>(
         s: &mut S,
-        lights: bool,
+        lights: LightValues,
         lobe: bool,
         roulette: bool,
         guided: bool,
     ) -> Self {
-        let (light, light_point) = if lights {
-            (s.next_1d(), s.next_2d())
-        } else {
-            s.skip_1d(1);
-            s.skip_2d(1);
-            (0.0, Vec2::ZERO)
+        let light = match lights {
+            LightValues::ChoiceAndPoint => s.next_1d(),
+            _ => {
+                s.skip_1d(1);
+                0.0
+            }
+        };
+        let light_point = match lights {
+            LightValues::None => {
+                s.skip_2d(1);
+                Vec2::ZERO
+            }
+            _ => s.next_2d(),
         };
         let lobe = if lobe {
             s.next_1d()
@@ -166,8 +203,16 @@ mod tests {
             let c = CameraSample::draw(&mut whole);
             let first = BounceSample::draw(&mut whole, true);
             let second = BounceSample::draw(&mut whole, true);
-            for mask in 0..8u32 {
-                let (lights, lobe, roulette) = (mask & 1 != 0, mask & 2 != 0, mask & 4 != 0);
+            let kinds = [
+                LightValues::None,
+                LightValues::Point,
+                LightValues::ChoiceAndPoint,
+            ];
+            for (lights, mask) in kinds
+                .into_iter()
+                .flat_map(|l| (0..4u32).map(move |m| (l, m)))
+            {
+                let (lobe, roulette) = (mask & 1 != 0, mask & 2 != 0);
                 let mut s = sampler.clone();
                 s.start_pixel_sample(pixel, i);
                 assert_eq!(CameraSample::draw(&mut s), c, "{name}");
@@ -175,17 +220,17 @@ mod tests {
                 let b = BounceSample::draw_needed(&mut s, lights, lobe, roulette, false);
                 for (got, want) in [(a, first), (b, second)] {
                     let what = format!(
-                        "{name} sample {i} lights {lights} lobe {lobe} roulette {roulette}"
+                        "{name} sample {i} lights {lights:?} lobe {lobe} roulette {roulette}"
                     );
-                    if lights {
-                        assert_eq!(
-                            (got.light, got.light_point),
-                            (want.light, want.light_point),
-                            "{what}"
-                        );
-                    } else {
-                        assert_eq!((got.light, got.light_point), (0.0, Vec2::ZERO), "{what}");
-                    }
+                    let light = match lights {
+                        LightValues::ChoiceAndPoint => want.light,
+                        _ => 0.0,
+                    };
+                    let point = match lights {
+                        LightValues::None => Vec2::ZERO,
+                        _ => want.light_point,
+                    };
+                    assert_eq!((got.light, got.light_point), (light, point), "{what}");
                     assert_eq!(got.lobe, if lobe { want.lobe } else { 0.0 }, "{what}");
                     assert_eq!(got.direction, want.direction, "{what}");
                     assert_eq!(

@@ -16,7 +16,7 @@ use vrpt::bsdf::Directions;
 use vrpt::integrator::mis_weight;
 use vrpt::lights::{luminance, Chosen, Emitter, LightChoice, LightPoints, Lights};
 use vrpt::math::Frame;
-use vrpt::sampling::sample_uniform_triangle;
+use vrpt::sampling::{sample_uniform_triangle, ONE_MINUS_EPSILON};
 use vrpt::stats::{chi2_sf, pooled_chi2, sidak};
 
 /// Family-wise α = 0.01 over the chi-square tests of this file: the power choice, the
@@ -944,4 +944,67 @@ fn a_deep_light_tree_keeps_every_lights_path() {
         }
     }
     assert!(checked > 50_000);
+}
+
+/// Where one light has power, every chooser picks it (with the same pmf) whatever the choice's
+/// value, so a path does not draw that value (`LightSampler::chooses` false, the image the
+/// same bits: `tools/same_images.py`); with two lights, or a tree over two emitters of which
+/// one has no power, the value is drawn. Checked at every receiver of a grid against the
+/// choice at `u = 0` (what a path that skips the value passes), for values at both ends of
+/// every unit range a chooser could split at (`u` over 2¹² steps and next to 1).
+#[test]
+fn one_light_is_chosen_whatever_the_value() {
+    let le = Vec3::splat(2.0);
+    let tri = |i: u32, z: f32, le: Vec3| {
+        let c = [
+            Vec3::new(-1.0, -1.0, z),
+            Vec3::new(1.0, -1.0, z),
+            Vec3::new(0.0, 1.0, z),
+        ];
+        Emitter::triangle(i, c, le)
+    };
+    let cases = [
+        ("one emitter", vec![tri(0, 0.0, le)], Vec3::ZERO, false),
+        ("the sky alone", vec![], Vec3::splat(0.5), false),
+        (
+            "a dark emitter and the sky",
+            vec![tri(0, 0.0, Vec3::ZERO)],
+            Vec3::splat(0.5),
+            false,
+        ),
+        (
+            "an emitter and the sky",
+            vec![tri(0, 0.0, le)],
+            Vec3::splat(0.5),
+            true,
+        ),
+        (
+            "two emitters",
+            vec![tri(0, 0.0, le), tri(1, 0.5, le)],
+            Vec3::ZERO,
+            true,
+        ),
+    ];
+    let us: Vec<f32> = (0..4096)
+        .map(|k| k as f32 / 4096.0)
+        .chain([ONE_MINUS_EPSILON])
+        .collect();
+    for (name, tris, sky, chooses) in cases {
+        let lights = Lights::build(tris, 2, sky, 10.0).unwrap();
+        for choice in [LightChoice::Tree, LightChoice::Power, LightChoice::Uniform] {
+            let s = lights.sampler(LightPoints::SolidAngle, choice);
+            assert_eq!(s.chooses(), chooses, "{name}, {choice:?}");
+            if chooses {
+                continue;
+            }
+            for (x, y) in (0..5).flat_map(|x| (0..5).map(move |y| (x, y))) {
+                let p = Vec3::new(x as f32 - 2.0, y as f32 - 2.0, 1.5);
+                let n = Vec3::new(0.1 * x as f32, 0.2, -1.0).normalize();
+                let at_zero = s.choose(p, n, 0.0);
+                for &u in &us {
+                    assert_eq!(s.choose(p, n, u), at_zero, "{name}, {choice:?}, u {u}");
+                }
+            }
+        }
+    }
 }
