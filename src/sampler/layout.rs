@@ -11,9 +11,11 @@
 //! the bounce (the first bounce's indices are those of every other strategy); a guided render
 //! strides 8 dimensions per bounce, the others 5.
 //! The light dimensions come first because next-event estimation happens first at a vertex.
-//! Every bounce draws all of its dimensions, used or not (`--lights bsdf` draws the light
-//! dimensions too), so a dimension index means the same
-//! decision in every sample — what stratification needs. [`CameraSample::draw`] and
+//! Every bounce keeps all of its dimensions, used or not: a value the bounce cannot use (the
+//! light's under `--lights bsdf`, the light choice where one light can be chosen, the lobe
+//! choice of a BSDF of one lobe, the roulette before it starts) is skipped, not drawn, and its
+//! index kept, so a dimension index means the same decision in every sample — what
+//! stratification needs. [`CameraSample::draw`] and
 //! [`BounceSample::draw`] are the only code that draws them; tests and benchmarks walk the same
 //! tables.
 
