@@ -212,6 +212,23 @@ fn ray_of(origin: Vec3, dir: Vec3, tmax: f32) -> Ray {
     }
 }
 
+/// The ray of a small scene's walk: [`ray_of`]'s, but where the walk tests no box
+/// ([`BlockBoxes::culls`] false) without the inverse direction, which only a box test reads
+/// (the triangle test reads the origin, the direction and the interval): a division a ray less.
+#[inline(always)]
+fn small_ray(boxes: &BlockBoxes, origin: Vec3, dir: Vec3, tmax: f32) -> Ray {
+    if boxes.culls {
+        return ray_of(origin, dir, tmax);
+    }
+    Ray {
+        origin: Vec3A::from(origin),
+        direction: positive_zeros(dir),
+        inv_direction: Vec3A::NAN,
+        tmin: 0.0,
+        tmax,
+    }
+}
+
 /// `dir` with every −0.0 component made +0.0. obvhs inverts a zero component as
 /// `signum(x)/ε` (−1/ε for −0.0) but orders the slabs and octants by `x < 0.0` (false for
 /// −0.0): a ray with a −0.0 component, e.g. `-Vec3::Z`, met a flat box's slabs in the wrong order
@@ -467,7 +484,7 @@ impl Accel {
         (origin, dir, tmax): (Vec3, Vec3, f32),
         keep: impl Fn(u32, Vec2) -> bool,
     ) -> Option<Hit> {
-        let mut ray = ray_of(origin, dir, tmax);
+        let mut ray = small_ray(boxes, origin, dir, tmax);
         let mut best = None;
         small_closest_avx2(self, boxes, &mut ray, &mut best, &keep);
         hit_of(best, ray.tmax)
@@ -485,7 +502,8 @@ impl Accel {
         keep: impl Fn(u32, Vec2) -> bool,
     ) -> bool {
         if let Some(boxes) = &self.small {
-            return small_any_avx2(self, boxes, &ray_of(origin, dir, tmax), &keep);
+            let ray = small_ray(boxes, origin, dir, tmax);
+            return small_any_avx2(self, boxes, &ray, &keep);
         }
         any_walk!(
             self,
