@@ -184,11 +184,12 @@ impl Gate {
         }
     }
 
-    /// Whether training iteration `k` over `pixels` pixels is followed by a probe.
+    /// Whether training iteration `k` over `pixels` pixels is followed by a probe: from the
+    /// first probe's iteration ([`first_probe`], the one rule auto's staging reads too) while
+    /// undecided, for at most [`GATE_PROBES`] readings.
     pub fn probes_at(&self, k: u32, pixels: u64) -> bool {
         self.verdict == Verdict::Undecided
-            && k >= GATE_FIRST
-            && (1u64 << k).saturating_mul(pixels) >= GATE_PATHS
+            && k >= first_probe(pixels)
             && self.readings < GATE_PROBES
     }
 

@@ -110,11 +110,7 @@ impl BounceSample {
     /// dimensions are skipped, not drawn, and read as zero: the layout stays the same.
     #[inline(always)]
     pub fn draw<S: Sampler>(s: &mut S, lights: bool) -> Self {
-        let lights = match lights {
-            true => LightValues::ChoiceAndPoint,
-            false => LightValues::None,
-        };
-        Self::draw_needed(s, lights, true, true, false)
+        Self::draw_needed(s, LightValues::of(lights, true), true, true, false)
     }
 
     /// [`BounceSample::draw`] that draws the light values `lights` asks for (the light choice
