@@ -111,6 +111,7 @@ pub(super) fn of_render(
     if let Some(e) = &edges {
         stats.rays.add(&e.rays);
         stats.edge_pixels = e.count;
+        stats.edge_finding = e.rays.edge;
     }
     edges
 }

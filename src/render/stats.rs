@@ -18,6 +18,9 @@ pub struct RenderStats {
     pub nonfinite: u64,
     /// The pixels where samples spent edge rays (`--edge-rays`; [`super::edges`]).
     pub edge_pixels: u64,
+    /// The edge rays (in `rays.edge`) that found those pixels: the edge map's probe and pilot,
+    /// traced once whether or not it finds any.
+    pub edge_finding: u64,
     /// Wall time summed over the tiles, i.e. over the worker threads (≈ `elapsed` × threads).
     pub thread_time: Duration,
     /// What path guiding's training did (guided directions only); `elapsed`, `rays` and
@@ -246,11 +249,12 @@ impl RenderStats {
             0 => String::new(),
             n => format!(", {n} of them reuse connections"),
         };
-        let edges = match self.rays.edge {
-            0 => String::new(),
-            n => format!(
-                ", {n} of them edge rays in {} edge pixels",
-                self.edge_pixels
+        let edges = match (self.rays.edge, self.edge_pixels) {
+            (0, _) => String::new(),
+            (n, 0) => format!(", {n} of them edge rays looking for edge pixels (none found)"),
+            (n, k) => format!(
+                ", {n} of them edge rays in {k} edge pixels ({} of them finding those)",
+                self.edge_finding
             ),
         };
         // the light through a mirror or glass after a Phong vertex, where there was any

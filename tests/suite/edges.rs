@@ -130,13 +130,19 @@ fn edge_rays_agree_with_the_path_tracer() {
                 roulette,
                 ..base.clone()
             };
-            // the renders spend edge rays: more than the probe's four a pixel
+            // the renders spend edge rays: the map's finding (at least the probe's four a
+            // pixel), then at least one a sample in each edge pixel it found
             let (_, stats) = render_quiet(&scene, &settings);
             let probe = 4 * (w * h) as u64;
             assert!(
-                stats.rays.edge > probe + (m * settings.spp) as u64,
-                "{name}: {} edge rays, no edge pixel",
-                stats.rays.edge
+                stats.edge_pixels > 0
+                    && stats.edge_finding >= probe
+                    && stats.rays.edge - stats.edge_finding
+                        >= stats.edge_pixels * settings.spp as u64,
+                "{name}: {} edge rays, {} of them finding {} edge pixels",
+                stats.rays.edge,
+                stats.edge_finding,
+                stats.edge_pixels
             );
             let seed = common::seed(7100 + 100 * (4 * s + j) as u64);
             let (p, lit) = smallest_p(&scene, &settings, seed, &reference);
