@@ -232,6 +232,8 @@ pub struct PassPlan {
     /// render finds them (`edges::edge_map`). `--strategy auto` finds them once, with the render's
     /// seed and its first candidate's integrator, for its pilots, and hands them to the render
     /// it chooses where they are the map that render would find itself (`edges::edges_fit`).
+    /// A render handed its map does not count the rays that found it (the finder traced them):
+    /// a pilot's cost in rays is its own.
     pub edges: Option<Arc<edges::EdgeMap>>,
     /// A guided render that trains its own guide over the whole image probes the guide against
     /// Phong directions during its training and renders the rest without it where it loses

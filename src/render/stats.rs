@@ -19,7 +19,7 @@ pub struct RenderStats {
     /// The pixels where samples spent edge rays (`--edge-rays`; [`super::edges`]).
     pub edge_pixels: u64,
     /// The edge rays (in `rays.edge`) that found those pixels: the edge map's probe and pilot,
-    /// traced once whether or not it finds any.
+    /// traced once whether or not it finds any (0 where the map was handed to the render).
     pub edge_finding: u64,
     /// Wall time summed over the tiles, i.e. over the worker threads (≈ `elapsed` × threads).
     pub thread_time: Duration,
@@ -252,10 +252,12 @@ impl RenderStats {
         let edges = match (self.rays.edge, self.edge_pixels) {
             (0, _) => String::new(),
             (n, 0) => format!(", {n} of them edge rays looking for edge pixels (none found)"),
-            (n, k) => format!(
-                ", {n} of them edge rays in {k} edge pixels ({} of them finding those)",
-                self.edge_finding
-            ),
+            (n, k) => match self.edge_finding {
+                0 => format!(", {n} of them edge rays in {k} edge pixels"),
+                f => format!(
+                    ", {n} of them edge rays in {k} edge pixels ({f} of them finding those)"
+                ),
+            },
         };
         // the light through a mirror or glass after a Phong vertex, where there was any
         let caustic = match self.rays.caustic > 0.0 {
