@@ -268,13 +268,8 @@ impl<'a, F: SamplerFactory> Kernel<'a, F> {
     pub(super) fn render(&self, batch: &Batch, film: Option<&mut Film>) -> BatchOutput {
         let start = Instant::now();
         let sums = film.as_deref();
-        // one sampler for the pass, cloned per job; an adaptive round makes one per pixel.
-        // Without path reuse each tile is a job of its own (`with_max_len(1)`): rayon's own
-        // split left leaves of many tiles that no thief can split, and a core idle while the
-        // other ended one (Mitsuba's box on 2 threads: 183–185% of the CPU busy, 196–198% now;
-        // 256 spp 6.83 → 6.31 s). With reuse a job clones a sampler per pixel of a tile, whose
-        // tables then grow anew, and a job a tile was no faster (the Cornell box, `farm-bench`
-        // nine pairs: 0.99× the wall time, 1.04× the CPU): there the jobs keep rayon's split
+        // one sampler for the pass, cloned per worker; an adaptive round makes one per pixel.
+        // The workers take the tiles one at a time ([`tiles_in_order`]).
         let set = match &batch.samples {
             Samples::Pass { set, .. } => *set,
             Samples::Own(_) => SamplePass { origin: 0, size: 1 },
@@ -286,20 +281,17 @@ impl<'a, F: SamplerFactory> Kernel<'a, F> {
             // one sampler per pixel of a tile, each kept on its pixel (a stratified sampler's
             // tables are per pixel)
             let samplers = vec![sampler; (TILE * TILE) as usize];
-            batch
-                .tiles
-                .clone()
-                .into_par_iter()
-                .map_with(samplers, |s, t| self.tile_reused(t, k, batch, sums, s))
-                .collect()
+            tiles_in_order(
+                batch.tiles.clone(),
+                || samplers.clone(),
+                |s, t| self.tile_reused(t, k, batch, sums, s),
+            )
         } else {
-            batch
-                .tiles
-                .clone()
-                .into_par_iter()
-                .with_max_len(1)
-                .map_with(sampler, |sampler, t| self.tile(t, batch, sums, sampler))
-                .collect()
+            tiles_in_order(
+                batch.tiles.clone(),
+                || sampler.clone(),
+                |s, t| self.tile(t, batch, sums, s),
+            )
         };
         let mut out = gather(tiles, film);
         out.stats.elapsed = start.elapsed();
@@ -446,6 +438,39 @@ impl<'a, F: SamplerFactory> Kernel<'a, F> {
         tile.samples += range.end - range.start;
         Some((sum, sum_sq, n))
     }
+}
+
+/// `work(state, t)` for every tile `t` of `tiles`, in tile order: each worker of the pool makes
+/// its `state` once (`make`: a sampler, or one per pixel of a tile) and takes the next tile from a
+/// shared counter until none is left. A tile at a time, no core waits while the other ends a
+/// run of tiles (rayon's own split of the range left leaves of many tiles that no thief can
+/// split: Mitsuba's box on 2 threads kept 183–185% of the CPU busy, 196–198% now; 256 spp
+/// 6.84 → 6.31–6.41 s), and no state is remade per tile (a state per tile, rayon's jobs of one
+/// tile, cost path reuse, whose state is a sampler per pixel, 0.14 s of system time on the
+/// Cornell box; with the counter `--reuse 4` there takes 0.96× the wall time, 15 pairs). Which
+/// worker renders a tile changes nothing in it: the images are the same bits.
+fn tiles_in_order<S, T: Send>(
+    tiles: Range<u32>,
+    make: impl Fn() -> S + Sync,
+    work: impl Fn(&mut S, u32) -> T + Sync,
+) -> Vec<T> {
+    let next = std::sync::atomic::AtomicU32::new(tiles.start);
+    let workers = rayon::current_num_threads().clamp(1, tiles.len().max(1));
+    let mut done: Vec<(u32, T)> = (0..workers)
+        .into_par_iter()
+        .flat_map_iter(|_| {
+            let (mut state, mut out) = (make(), Vec::new());
+            loop {
+                let t = next.fetch_add(1, Ordering::Relaxed);
+                if t >= tiles.end {
+                    break out;
+                }
+                out.push((t, work(&mut state, t)));
+            }
+        })
+        .collect();
+    done.sort_unstable_by_key(|&(t, _)| t);
+    done.into_iter().map(|(_, r)| r).collect()
 }
 
 /// The tiles' results gathered: their pixels' sums written into `film` (if any), their
