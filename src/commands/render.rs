@@ -457,6 +457,9 @@ impl RenderRequest {
             edges: None,
             discard_training: self.training_images.as_deref() == Some("discard"),
             ungated: self.guide_gate.as_deref() == Some("off"),
+            // auto's twin only (see `PassPlan::gate_early`): the lamp's caustics, which an
+            // immature guide has not found yet, would close it wrongly
+            gate_early: false,
         })
     }
 }

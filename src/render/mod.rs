@@ -240,6 +240,10 @@ pub struct PassPlan {
     /// ([`gate`]; where it gates: `gates`), unless this is set (`--guide-gate off`): then it
     /// guides whatever it reads.
     pub ungated: bool,
+    /// Whether such a render's gate, where it discards the training images (path reuse), also
+    /// takes the early look ([`gate::Gate::looking_early`]): set by `--strategy auto` for its
+    /// guided twin where the probe found no light coming as caustics.
+    pub gate_early: bool,
 }
 
 /// Wall time the samples that a stopped render takes after the stop aim at (see
@@ -395,7 +399,8 @@ pub fn render_passes_with<F: SamplerFactory>(
         };
         let tree = (guided && learned.is_none()).then(|| {
             let budget = TrainingBudget::of_render(settings, plan);
-            let gate = gates(settings, plan).then(|| gate::Gate::new(kept.is_some()));
+            let gate = gates(settings, plan)
+                .then(|| gate::Gate::new(kept.is_some()).looking_early(plan.gate_early));
             trainer.train(start, budget, &mut stats, kept.as_mut(), gate)
         });
         let tree = learned.map(|l| &l.tree).or(tree.as_ref());

@@ -114,6 +114,8 @@ impl<'a, F: SamplerFactory> Trainer<'a, F> {
         let mut tree = Guide::new(lo, hi);
         let mut g = GuideStats::default();
         let mut last = Duration::ZERO;
+        // the early look's half of the first probe, and the rays it traced
+        let mut half_probe: Option<(Film, u64)> = None;
         if let Some(gate) = gate.as_mut() {
             gate.first = super::gate::first_probe(self.pixels());
         }
@@ -133,8 +135,11 @@ impl<'a, F: SamplerFactory> Trainer<'a, F> {
             let began = Instant::now();
             let keep = kept.is_some() && spp >= 2;
             let probing = gate.as_ref().is_some_and(|g| g.probes_at(k, self.pixels()));
+            let early = gate
+                .as_ref()
+                .is_some_and(|g| g.looks_early_at(k, self.pixels()));
             let rays_before = stats.rays.total();
-            let Some(film) = self.iteration(k, &mut tree, stats, keep || probing) else {
+            let Some(film) = self.iteration(k, &mut tree, stats, keep || probing || early) else {
                 break;
             };
             let guided_rays = stats.rays.total() - rays_before;
@@ -144,11 +149,20 @@ impl<'a, F: SamplerFactory> Trainer<'a, F> {
             if let (Some(kept), Some(image)) = (kept.as_deref_mut().filter(|_| keep), &image) {
                 kept.push(image.clone());
             }
-            if let (Some(gate), Some(image)) = (gate.as_mut().filter(|_| probing), image) {
-                let Some((probe, probe_rays)) = self.probe(k, stats) else {
+            let per_sample = |rays: u64| rays as f64 / (spp * self.pixels()) as f64;
+            if let (Some(gate), Some(image)) = (gate.as_mut().filter(|_| early), &image) {
+                let Some(half) = self.look_early(k, gate, (image, per_sample(guided_rays)), stats)
+                else {
                     break; // the stop flag cut the probe: dropped, and training ends
                 };
-                let per_sample = |rays: u64| rays as f64 / (spp * self.pixels()) as f64;
+                half_probe = Some(half);
+            }
+            let closed = gate.as_ref().is_some_and(Gate::closed);
+            if let (Some(gate), Some(image)) = (gate.as_mut().filter(|_| probing && !closed), image)
+            {
+                let Some((probe, probe_rays)) = self.probe(k, half_probe.take(), stats) else {
+                    break; // the stop flag cut the probe: dropped, and training ends
+                };
                 gate.read(
                     k,
                     (&image, per_sample(guided_rays)),
@@ -158,14 +172,12 @@ impl<'a, F: SamplerFactory> Trainer<'a, F> {
                 if let Some(kept) = kept.as_deref_mut() {
                     kept.push_probe(probe);
                 }
-                if gate.closed() {
-                    g.iterations += 1;
-                    g.training_spp += spp;
-                    break;
-                }
             }
             g.iterations += 1;
             g.training_spp += spp;
+            if gate.as_ref().is_some_and(Gate::closed) {
+                break; // the rest renders with Phong directions
+            }
             last = took;
         }
         g.training = start.elapsed();
@@ -250,13 +262,58 @@ impl<'a, F: SamplerFactory> Trainer<'a, F> {
         self.settings.width as u64 * self.settings.height as u64
     }
 
+    /// The gate's early look at iteration `k`'s image (with the rays its paths traced per pixel
+    /// sample): the first half of the next iteration's probe rendered and read against it
+    /// ([`Gate::look_early`]); the half's film and rays, which that probe completes, or `None`
+    /// where the stop flag cut it.
+    fn look_early(
+        &self,
+        k: u32,
+        gate: &mut Gate,
+        guided: (&IterationImage, f64),
+        stats: &mut RenderStats,
+    ) -> Option<(Film, u64)> {
+        let spp = 1u64 << k;
+        let mut film = Film::new(self.settings.width, self.settings.height);
+        let rays = self.probe_samples(k + 1, 0..spp, &mut film, stats)?;
+        let per_sample = rays as f64 / (spp * self.pixels()) as f64;
+        let half = (&IterationImage::of(&film), per_sample);
+        gate.look_early(k, guided, half, self.settings.width as usize);
+        Some((film, rays))
+    }
+
     /// The gate's probe of training iteration `k` ([`super::gate`]): `2^k` spp with the guide off
     /// and without path reuse (as the training iterations render), on seeds of its own (`mix64` of
     /// the iteration's seed input with a constant of its own); its image and the rays it traced
-    /// (added to `stats` with its thread time), or `None` where the stop flag cut it.
-    fn probe(&self, k: u32, stats: &mut RenderStats) -> Option<(IterationImage, u64)> {
-        let settings = self.settings;
+    /// (added to `stats` with its thread time), or `None` where the stop flag cut it. Given
+    /// `half`, the film and rays of its first `2^(k−1)` spp (the gate's early look), it renders
+    /// the rest into that film.
+    fn probe(
+        &self,
+        k: u32,
+        half: Option<(Film, u64)>,
+        stats: &mut RenderStats,
+    ) -> Option<(IterationImage, u64)> {
         let spp = 1u64 << k;
+        let (mut film, rays, from) = match half {
+            Some((film, rays)) => (film, rays, spp / 2),
+            None => (Film::new(self.settings.width, self.settings.height), 0, 0),
+        };
+        let more = self.probe_samples(k, from..spp, &mut film, stats)?;
+        Some((IterationImage::of(&film), rays + more))
+    }
+
+    /// The samples `range` of probe `k`'s `2^k` spp ([`Trainer::probe`]) added to `film`: the
+    /// rays they traced (added to `stats` with the thread time), or `None` where the stop flag
+    /// cut them.
+    fn probe_samples(
+        &self,
+        k: u32,
+        range: Range<u64>,
+        film: &mut Film,
+        stats: &mut RenderStats,
+    ) -> Option<u64> {
+        let settings = self.settings;
         let seed = crate::math::mix64(
             settings.seed ^ (k as u64 + 1).wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ 0x5bd1_e995,
         );
@@ -269,18 +326,17 @@ impl<'a, F: SamplerFactory> Trainer<'a, F> {
             samples: Samples::Pass {
                 set: SamplePass {
                     origin: 0,
-                    size: spp as u32,
+                    size: 1u32 << k,
                 },
-                range: 0..spp,
+                range,
             },
             tiles: 0..tile_count(settings),
             stop: self.plan.stop.as_deref(),
         };
-        let mut film = Film::new(settings.width, settings.height);
-        let out = kernel.render(&batch, Some(&mut film));
+        let out = kernel.render(&batch, Some(film));
         stats.rays.add(&out.stats.rays);
         stats.thread_time += out.stats.thread_time;
-        (!out.cut).then(|| (IterationImage::of(&film), out.stats.rays.total()))
+        (!out.cut).then(|| out.stats.rays.total())
     }
 }
 

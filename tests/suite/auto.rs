@@ -147,6 +147,8 @@ fn auto_pilots_a_guided_candidate_only_where_an_unguided_one_won() {
         assert_eq!(names, ["independent", "mis"], "{}", choice.table());
         assert_eq!(choice.stage, GuidedStage::Rendered);
         assert_eq!(choice.candidate.to_string(), guided, "mis's twin");
+        // no caustic: the twin's gate takes its early look where it discards its training
+        assert!(choice.plan(&vrpt::render::PassPlan::default()).gate_early);
         assert!(choice.unpiloted.is_empty() && choice.guide.is_none());
         assert_eq!(switched.meta.strategy.to_string(), guided);
         // the twin's image is `--directions guided`'s, bit for bit
@@ -281,6 +283,8 @@ fn auto_tries_a_guided_candidate_where_the_light_is_caustic() {
     assert!(lamp.rows.is_empty(), "no pilot: {}", lamp.table());
     assert!(lamp.caustic >= CAUSTIC_GATE, "{}", lamp.table());
     assert_eq!(lamp.stage, GuidedStage::Rendered, "{}", lamp.table());
+    // caustics, which an immature guide has not found yet: no early look
+    assert!(!lamp.plan(&vrpt::render::PassPlan::default()).gate_early);
     assert_eq!(lamp.candidate.to_string(), guided);
     assert_eq!(lamp.unpiloted.len(), 2, "both mis: {}", lamp.table());
     assert!(lamp.guide.is_none());

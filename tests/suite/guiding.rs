@@ -287,6 +287,18 @@ fn a_handed_over_guide_renders_as_the_guide_learned_in_place() {
     assert!(ignored.stats.guide.is_none());
 }
 
+/// An image's mean and the variance of that mean: the sum of its pixels' variances of the mean
+/// over the pixels squared (independent pixels).
+fn image_mean(film: &vrpt::film::Film) -> (glam::DVec3, glam::DVec3) {
+    let (mut m, mut v) = (glam::DVec3::ZERO, glam::DVec3::ZERO);
+    for i in 0..film.len() {
+        m += film.mean(i);
+        v += film.variance_of_mean(i);
+    }
+    let n = film.len() as f64;
+    (m / n, v / (n * n))
+}
+
 /// The guide's gate (`vrpt::render::gate`) on the scenes it was built for, at 128×96 pixels and
 /// 256 spp (64 on the door; training up to half: its iterations from 16 spp on hold 2¹⁷ paths),
 /// seeds 1–3. On the glossy plates, whose guide learns nothing NEE and the Phong lobes
@@ -311,15 +323,6 @@ fn the_gate_closes_on_the_glossy_plates_and_opens_on_the_door() {
         seed: common::seed(seed),
         strategy: Strategy::of(SamplerKind::Stratified, directions, LightStrategy::Mis),
         ..Default::default()
-    };
-    let image_mean = |film: &vrpt::film::Film| {
-        let (mut m, mut v) = (glam::DVec3::ZERO, glam::DVec3::ZERO);
-        for i in 0..film.len() {
-            m += film.mean(i);
-            v += film.variance_of_mean(i);
-        }
-        let n = film.len() as f64;
-        (m / n, v / (n * n))
     };
     let plates = common::shipped("glossy-plates");
     let door = common::shipped("door");
@@ -372,4 +375,74 @@ fn the_gate_closes_on_the_glossy_plates_and_opens_on_the_door() {
         assert_eq!(gate.verdict, Verdict::Open, "seed {seed}: {gate:?}");
         assert!(gate.last.unwrap().z < -3.0, "seed {seed}: {gate:?}");
     }
+}
+
+/// The gate's early look (`Gate::looking_early`: `--strategy auto`'s guided twin where no light
+/// came as caustics), at 128×96 with `--reuse 4` and 64 spp, seed 1: the first probe comes at
+/// 16 spp (2¹⁷ paths), the early look at 8 spp against that probe's first half. On the glossy
+/// plates (Phong directions 1.4–1.9× as efficient: the test above) it closes the gate at 8 spp,
+/// the training ends after 15 spp, and the image is unbiased (its mean against a Phong render's,
+/// as above: three tests, bound 4.4). On the door, where the guide wins, it does not close, and
+/// the render is the one without it: the same reading at 16 spp (the probe's halves pooled add
+/// its sums in another order: within 1e-9) and the same image, bit for bit.
+#[test]
+fn the_early_look_closes_where_the_guide_loses_and_changes_nothing_else() {
+    use vrpt::render::{gate::Verdict, render_passes, NoProgress, PassPlan};
+    let settings = |directions, max_depth| RenderSettings {
+        width: 128,
+        height: 96,
+        spp: 64,
+        max_depth,
+        reuse: 4,
+        seed: common::seed(1),
+        strategy: Strategy::of(SamplerKind::Stratified, directions, LightStrategy::Mis),
+        ..Default::default()
+    };
+    let early = PassPlan {
+        gate_early: true,
+        ..PassPlan::default()
+    };
+    let plates = common::shipped("glossy-plates");
+    let r = render_passes(
+        &plates,
+        &settings(Directions::Guided, 4),
+        &early,
+        &NoProgress,
+    )
+    .unwrap();
+    let g = r.stats.guide.unwrap();
+    let gate = g.gate.expect("the plates' training reaches the early look");
+    assert_eq!(gate.verdict, Verdict::Closed, "{gate:?}");
+    assert_eq!((gate.readings, gate.last.unwrap().spp), (1, 8), "{gate:?}");
+    assert!(gate.record().contains("an early look"), "{}", gate.record());
+    assert_eq!(g.training_spp, 15, "{g:?}");
+    let phong = RenderSettings {
+        seed: common::seed(101),
+        reuse: 1,
+        ..settings(Directions::Phong, 4)
+    };
+    let p = render_passes(&plates, &phong, &PassPlan::default(), &NoProgress).unwrap();
+    let ((ma, va), (mb, vb)) = (image_mean(&r.film), image_mean(&p.film));
+    let z = (ma - mb) / (va + vb).powf(0.5);
+    assert!(z.abs().max_element() < 4.4, "z {z}");
+
+    let door = common::shipped("door");
+    let s = settings(Directions::Guided, 10);
+    let looked = render_passes(&door, &s, &early, &NoProgress).unwrap();
+    let plain = render_passes(&door, &s, &PassPlan::default(), &NoProgress).unwrap();
+    let gate = |r: &vrpt::render::Rendered| r.stats.guide.unwrap().gate.unwrap();
+    let (a, b) = (gate(&looked), gate(&plain));
+    assert!(a.early && !b.early, "{a:?} {b:?}");
+    assert_eq!(a.verdict, Verdict::Open, "{a:?}");
+    assert_eq!(
+        (a.verdict, a.readings),
+        (b.verdict, b.readings),
+        "{a:?} {b:?}"
+    );
+    let (ra, rb) = (a.last.unwrap(), b.last.unwrap());
+    assert!(
+        ra.spp == 16 && (ra.ratio / rb.ratio - 1.0).abs() < 1e-9,
+        "{ra:?} {rb:?}"
+    );
+    assert_eq!(looked.film.mean_image(), plain.film.mean_image());
 }

@@ -511,12 +511,14 @@ impl Choice {
     }
 
     /// The plan of the render after the pilots: `plan` with the time the pilots did not use,
-    /// and the chosen candidate's guide when it learned one.
+    /// and the chosen candidate's guide when it learned one; a guided twin rendered where the
+    /// probe found no caustics takes its gate's early look ([`PassPlan::gate_early`]).
     pub fn plan(&self, plan: &PassPlan) -> PassPlan {
         PassPlan {
             time_limit: (plan.time_limit).map(|t| t.saturating_sub(self.elapsed)),
             guide: self.guide.clone(),
             edges: self.edges.clone(),
+            gate_early: self.stage == GuidedStage::Rendered && self.caustic < CAUSTIC_GATE,
             ..plan.clone()
         }
     }
