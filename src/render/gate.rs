@@ -202,7 +202,7 @@ impl Gate {
 
     /// The gate, taking the early look where `early` asks for it and the training is discarded
     /// (the margin): at the iteration before its first probe's, against the first half of that
-    /// probe ([`Gate::look_early`]; auto's guided twin where no light came as caustics,
+    /// probe (the module doc's early look; auto's guided twin where no light came as caustics,
     /// [`super::PassPlan::gate_early`]).
     pub fn looking_early(self, early: bool) -> Self {
         Gate {
