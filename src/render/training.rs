@@ -121,16 +121,8 @@ impl<'a, F: SamplerFactory> Trainer<'a, F> {
         }
         for k in 0u32..32 {
             let spp = 1u64 << k;
-            if k > 0 {
-                let over_time = budget.time.is_some_and(|t| start.elapsed() + 2 * last > t);
-                let stopped = self
-                    .plan
-                    .stop
-                    .as_ref()
-                    .is_some_and(|f| f.load(Ordering::Relaxed));
-                if g.training_spp + spp > budget.spp || over_time || stopped {
-                    break;
-                }
+            if k > 0 && !self.starts(budget, start, last, g.training_spp + spp) {
+                break;
             }
             let began = Instant::now();
             let keep = kept.is_some() && spp >= 2;
@@ -260,6 +252,15 @@ impl<'a, F: SamplerFactory> Trainer<'a, F> {
     /// Pixels of the image.
     fn pixels(&self) -> u64 {
         self.settings.width as u64 * self.settings.height as u64
+    }
+
+    /// Whether the next training iteration starts: the training's spp with it (`spp`) within
+    /// the budget's, its time expected (twice the `last` one's, begun at `start`) within the
+    /// budget's, and no stop asked for.
+    fn starts(&self, budget: TrainingBudget, start: Instant, last: Duration, spp: u64) -> bool {
+        let over_time = budget.time.is_some_and(|t| start.elapsed() + 2 * last > t);
+        let stopped = (self.plan.stop.as_ref()).is_some_and(|f| f.load(Ordering::Relaxed));
+        spp <= budget.spp && !over_time && !stopped
     }
 
     /// The gate's early look at iteration `k`'s image (with the rays its paths traced per pixel
