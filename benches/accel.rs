@@ -7,13 +7,14 @@
 //! `trace_cornell` traces the rays of real paths in the shipped Cornell box (camera rays, their
 //! diffuse bounces and the shadow rays toward light samples, recorded once): the bare traversal
 //! rate to hold against the ray rate inside a render (`vrpt render --stats` prints both the
-//! render's rate and its rate while tracing).
+//! render's rate and its rate while tracing), one by one and 8 to a packet
+//! (`Accel::intersect_packet`, `Accel::occluded_packet`).
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use glam::{UVec2, Vec2, Vec3};
 use std::hint::black_box;
 use std::time::Duration;
-use vrpt::accel::Accel;
+use vrpt::accel::{Accel, RayPacket, LANES};
 use vrpt::camera::Camera;
 use vrpt::lights::{LightChoice, LightPoints};
 use vrpt::math::Frame;
@@ -177,7 +178,37 @@ fn trace_cornell(c: &mut Criterion) {
             black_box(hits)
         })
     });
+    // the same rays 8 to a packet (`Accel::intersect_packet`: in lanes on a small scene)
+    let mut stack = vrpt::accel::TraceStack::default();
+    g.bench_function("closest_packets", |b| {
+        b.iter(|| {
+            let (mut hits, mut p) = (0u32, RayPacket::new());
+            let mut out = [None; LANES];
+            for rays in closest.chunks(LANES) {
+                p.clear();
+                for (lane, &(o, d)) in rays.iter().enumerate() {
+                    p.set(lane, o, d, f32::INFINITY);
+                }
+                scene.accel.intersect_packet(&mut stack, &p, &mut out);
+                hits += out[..rays.len()].iter().filter(|h| h.is_some()).count() as u32;
+            }
+            black_box(hits)
+        })
+    });
     g.throughput(Throughput::Elements(shadow.len() as u64));
+    g.bench_function("shadow_packets", |b| {
+        b.iter(|| {
+            let (mut hits, mut p) = (0u32, RayPacket::new());
+            for rays in shadow.chunks(LANES) {
+                p.clear();
+                for (lane, &(o, d, t)) in rays.iter().enumerate() {
+                    p.set(lane, o, d, t);
+                }
+                hits += scene.accel.occluded_packet(&mut stack, &p).count_ones();
+            }
+            black_box(hits)
+        })
+    });
     g.bench_function("shadow", |b| {
         b.iter(|| {
             let mut hits = 0u32;

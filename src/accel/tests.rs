@@ -369,3 +369,77 @@ fn flat_blocks_keep_their_ties() {
     assert!(hits > 7_000, "{hits}");
     assert!(entries >= 2 * hits, "{entries}");
 }
+
+/// Packets of rays ([`Accel::intersect_packet`], [`Accel::occluded_packet`]) give each live
+/// lane the hit and the verdict of its ray alone, bit for bit: on a small scene with
+/// coincident triangles (ties of `t`, facing the same way and the other way), with the
+/// blocks' boxes tested first and not, rays of every direction (zero components of either
+/// sign), short and infinite `tmax`, and packets with dead lanes between live ones (whose
+/// stale rays must not count); and ray by ray on a scene too large for packets.
+#[test]
+fn packets_give_each_rays_hit() {
+    // every fourth triangle four times, twice each way round: the build puts coincident
+    // triangles at neighbouring indices, so the ties fall among the lanes' running hits
+    let mut tris = random_triangles(91, 60, 0.8);
+    let copies: Vec<[Vec3; 3]> = tris.iter().step_by(4).copied().collect();
+    tris.extend(&copies);
+    for _ in 0..2 {
+        tris.extend(copies.iter().map(|t| [t[0], t[2], t[1]]));
+    }
+    let large = random_triangles(92, 400, 0.3);
+    let mut rng = SmallRng::seed_from_u64(6);
+    let mut stack = TraceStack::default();
+    let (mut hits, mut blocked, mut lanes) = (0, 0, 0);
+    for (scene, culls) in [(&tris, Some(false)), (&tris, Some(true)), (&large, None)] {
+        let mut accel = Accel::build(scene);
+        assert_eq!(accel.small.is_some(), culls.is_some());
+        if let (Some(b), Some(c)) = (accel.small.as_mut(), culls) {
+            b.culls = c;
+        }
+        let mut p = RayPacket::new();
+        for i in 0..3000 {
+            // a fresh packet's lanes: live ones at random, a dead lane keeps its old ray
+            p.clear();
+            for lane in 0..LANES {
+                let o = Vec3::new(rng.random(), rng.random(), rng.random()) * 6.0 - 3.0;
+                let t = scene[rng.random_range(0..scene.len())];
+                let mut d = (t[0] * 0.6 + t[1] * 0.3 + t[2] * 0.1 - o).normalize_or(Vec3::X);
+                if (i + lane) % 5 == 0 {
+                    d.x = if lane % 2 == 0 { 0.0 } else { -0.0 };
+                    d = d.normalize_or(Vec3::Y);
+                }
+                let tmax = if lane % 3 == 0 { 2.0 } else { f32::INFINITY };
+                if rng.random::<f32>() < 0.8 {
+                    p.set(lane, o, d, tmax);
+                }
+            }
+            let mut got = [None; LANES];
+            accel.intersect_packet(&mut stack, &p, &mut got);
+            let blocking = accel.occluded_packet(&mut stack, &p);
+            assert_eq!(blocking & !p.live(), 0, "packet {i}: a dead lane blocked");
+            let bits =
+                |h: Option<Hit>| h.map(|h| (h.prim, h.t.to_bits(), h.b1.to_bits(), h.b2.to_bits()));
+            for lane in p.lanes() {
+                let (o, d, tmax) = p.ray(lane);
+                let want = accel.intersect_with(&mut stack, o, d, tmax);
+                assert_eq!(
+                    bits(got[lane]),
+                    bits(want),
+                    "packet {i}, lane {lane}, {culls:?}"
+                );
+                let occluded = accel.occluded_with(&mut stack, o, d, tmax);
+                assert_eq!(
+                    blocking & (1 << lane) != 0,
+                    occluded,
+                    "packet {i}, lane {lane}"
+                );
+                hits += want.is_some() as u32;
+                blocked += occluded as u32;
+                lanes += 1;
+            }
+        }
+    }
+    // rays aimed at triangles: most hit, a third of them with tmax 2 fewer
+    assert!(hits > lanes / 2 && hits < lanes, "{hits} of {lanes}");
+    assert!(blocked > lanes / 3, "{blocked} of {lanes}");
+}

@@ -66,7 +66,7 @@ pub(super) struct Tri {
 #[derive(Clone, Copy, Debug, Default)]
 #[repr(C, align(32))]
 pub(super) struct TriBlock {
-    rows: [[f32; 8]; 12],
+    pub(super) rows: [[f32; 8]; 12],
 }
 
 impl TriBlock {
@@ -193,45 +193,102 @@ fn block_test_avx2(
     #[allow(unsafe_code)]
     let row = |i: usize| unsafe { _mm256_load_ps(b.rows[i].as_ptr()) };
     let (o, d) = (ray.origin, ray.direction);
-    let (mul, add, sub) = (_mm256_mul_ps, _mm256_add_ps, _mm256_sub_ps);
-    let (dx, dy, dz) = (
-        _mm256_set1_ps(d.x),
-        _mm256_set1_ps(d.y),
-        _mm256_set1_ps(d.z),
+    let tri = std::array::from_fn(row);
+    let test = lane_test_avx2(
+        tri,
+        [o.x, o.y, o.z].map(|x| _mm256_set1_ps(x)),
+        [d.x, d.y, d.z].map(|x| _mm256_set1_ps(x)),
     );
+    let (tmin, tmax) = (_mm256_set1_ps(ray.tmin), _mm256_set1_ps(ray.tmax));
+    let hits = test.verdict(tmin, tmax);
+    (hits, test.t, test.nu, test.nv, test.det)
+}
+
+/// [`hit_triangle`] on 8 (triangle, ray) pairs, a pair a lane, its vectors: the denominator
+/// `det`, `1/det`, the barycentric numerators, `u`, `v`, `w` and `t`.
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy)]
+pub(super) struct LaneTest {
+    pub(super) det: std::arch::x86_64::__m256,
+    pub(super) inv_det: std::arch::x86_64::__m256,
+    pub(super) nu: std::arch::x86_64::__m256,
+    pub(super) nv: std::arch::x86_64::__m256,
+    pub(super) u: std::arch::x86_64::__m256,
+    pub(super) v: std::arch::x86_64::__m256,
+    pub(super) w: std::arch::x86_64::__m256,
+    pub(super) t: std::arch::x86_64::__m256,
+}
+
+/// [`hit_triangle`] operation for operation in each lane (glam's cross product and dot
+/// products in their order, a multiply then an add, never fused; the same division), so each
+/// lane's values are the scalar test's bits: `tri` the rows `v0`, `e1`, `e2`, `ng` (x, y, z
+/// each), `o` and `d` the rays' origins and directions. A block's 8 triangles against one ray
+/// broadcast, or one triangle broadcast against a packet's 8 rays (`packet.rs`).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+pub(super) fn lane_test_avx2(
+    tri: [std::arch::x86_64::__m256; 12],
+    [ox, oy, oz]: [std::arch::x86_64::__m256; 3],
+    [dx, dy, dz]: [std::arch::x86_64::__m256; 3],
+) -> LaneTest {
+    use std::arch::x86_64::*;
+    let (mul, add, sub) = (_mm256_mul_ps, _mm256_add_ps, _mm256_sub_ps);
     // c = v0 − origin; r = d × c as glam computes it
-    let cx = sub(row(0), _mm256_set1_ps(o.x));
-    let cy = sub(row(1), _mm256_set1_ps(o.y));
-    let cz = sub(row(2), _mm256_set1_ps(o.z));
+    let cx = sub(tri[0], ox);
+    let cy = sub(tri[1], oy);
+    let cz = sub(tri[2], oz);
     let rx = sub(mul(dy, cz), mul(cy, dz));
     let ry = sub(mul(dz, cx), mul(cz, dx));
     let rz = sub(mul(dx, cy), mul(cx, dy));
     // glam's dot: (x·x' + y·y') + z·z'
     let dot = |ax, ay, az, bx, by, bz| add(add(mul(ax, bx), mul(ay, by)), mul(az, bz));
-    let (ngx, ngy, ngz) = (row(9), row(10), row(11));
+    let (ngx, ngy, ngz) = (tri[9], tri[10], tri[11]);
     let det = dot(ngx, ngy, ngz, dx, dy, dz);
-    let inv = _mm256_div_ps(_mm256_set1_ps(1.0), det);
-    let nu = dot(rx, ry, rz, row(6), row(7), row(8));
-    let nv = dot(rx, ry, rz, row(3), row(4), row(5));
-    let (u, v) = (mul(nu, inv), mul(nv, inv));
+    let inv_det = _mm256_div_ps(_mm256_set1_ps(1.0), det);
+    let nu = dot(rx, ry, rz, tri[6], tri[7], tri[8]);
+    let nv = dot(rx, ry, rz, tri[3], tri[4], tri[5]);
+    let (u, v) = (mul(nu, inv_det), mul(nv, inv_det));
     let w = sub(sub(_mm256_set1_ps(1.0), u), v);
-    // a lane is negative where the sign bit of u, v or w is set
-    let negative = _mm256_castsi256_ps(_mm256_srai_epi32::<31>(_mm256_castps_si256(_mm256_or_ps(
-        _mm256_or_ps(u, v),
+    let t = mul(dot(ngx, ngy, ngz, cx, cy, cz), inv_det);
+    LaneTest {
+        det,
+        inv_det,
+        nu,
+        nv,
+        u,
+        v,
         w,
-    ))));
-    let t = mul(dot(ngx, ngy, ngz, cx, cy, cz), inv);
-    let hits = _mm256_andnot_ps(
-        negative,
-        _mm256_and_ps(
-            _mm256_cmp_ps::<_CMP_NEQ_UQ>(inv, _mm256_setzero_ps()),
+        t,
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+impl LaneTest {
+    /// The lanes hit (all bits set): `1/det ≠ 0`, none of `u`, `v`, `w` with its sign bit set
+    /// (a lane is negative where one is), and `t ∈ [tmin, tmax]`: [`hit_triangle`]'s verdict.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    pub(super) fn verdict(
+        &self,
+        tmin: std::arch::x86_64::__m256,
+        tmax: std::arch::x86_64::__m256,
+    ) -> std::arch::x86_64::__m256 {
+        use std::arch::x86_64::*;
+        let negative = _mm256_castsi256_ps(_mm256_srai_epi32::<31>(_mm256_castps_si256(
+            _mm256_or_ps(_mm256_or_ps(self.u, self.v), self.w),
+        )));
+        _mm256_andnot_ps(
+            negative,
             _mm256_and_ps(
-                _mm256_cmp_ps::<_CMP_GE_OQ>(t, _mm256_set1_ps(ray.tmin)),
-                _mm256_cmp_ps::<_CMP_LE_OQ>(t, _mm256_set1_ps(ray.tmax)),
+                _mm256_cmp_ps::<_CMP_NEQ_UQ>(self.inv_det, _mm256_setzero_ps()),
+                _mm256_and_ps(
+                    _mm256_cmp_ps::<_CMP_GE_OQ>(self.t, tmin),
+                    _mm256_cmp_ps::<_CMP_LE_OQ>(self.t, tmax),
+                ),
             ),
-        ),
-    );
-    (hits, t, nu, nv, det)
+        )
+    }
 }
 
 /// The blocks a group touches, from the highest: `(block, lanes)` for each block of the
