@@ -52,7 +52,7 @@ mod recorder;
 pub mod reuse;
 pub mod rrs;
 mod seen;
-pub use seen::{seen, seen_emission, Seen};
+pub use seen::{seen, seen_emission, seen_packet, Seen};
 
 pub use branching::MAX_RRS_DEPTH;
 pub use recorder::MAX_RECORDED_BOUNCES;

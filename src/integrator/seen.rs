@@ -3,7 +3,7 @@
 //! the same way.
 
 use super::RayCounts;
-use crate::accel::TraceStack;
+use crate::accel::{Hit, RayPacket, TraceStack, LANES};
 use crate::scene::Scene;
 use glam::Vec3;
 
@@ -32,7 +32,18 @@ pub fn seen(
 ) -> (Vec3, Seen) {
     rays.camera += 1;
     rays.edge += 1;
-    let Some(hit) = scene.intersect(stack, origin, dir, f32::INFINITY) else {
+    seen_at(
+        scene,
+        dir,
+        scene.intersect(stack, origin, dir, f32::INFINITY),
+    )
+}
+
+/// [`seen`] of a camera ray of direction `dir` whose closest hit is `hit` (already traced, and
+/// counted: a packet's lane, [`seen_packet`]).
+#[inline]
+pub fn seen_at(scene: &Scene, dir: Vec3, hit: Option<Hit>) -> (Vec3, Seen) {
+    let Some(hit) = hit else {
         return (scene.environment().radiance(dir), Seen::Sky);
     };
     let s = scene.surface(&hit);
@@ -53,4 +64,29 @@ pub fn seen_emission(
     stack: &mut TraceStack,
 ) -> Vec3 {
     seen(scene, ray, rays, stack).0
+}
+
+/// [`seen_emission`] along each of the `rays` (at most [`LANES`]; the lanes past them zero),
+/// traced as one packet ([`Scene::intersect_packet`]): the same values, bit for bit. Each ray
+/// is counted as a camera ray and an edge ray in `counts`.
+#[inline]
+pub fn seen_packet(
+    scene: &Scene,
+    rays: &[(Vec3, Vec3)],
+    counts: &mut RayCounts,
+    stack: &mut TraceStack,
+) -> [Vec3; LANES] {
+    let mut p = RayPacket::new();
+    for (lane, &(o, d)) in rays.iter().enumerate() {
+        p.set(lane, o, d, f32::INFINITY);
+    }
+    let mut hits = [None; LANES];
+    scene.intersect_packet(stack, &p, &mut hits);
+    counts.camera += rays.len() as u64;
+    counts.edge += rays.len() as u64;
+    let mut seen = [Vec3::ZERO; LANES];
+    for ((e, &(_, d)), hit) in seen.iter_mut().zip(rays).zip(hits) {
+        *e = seen_at(scene, d, hit).0;
+    }
+    seen
 }

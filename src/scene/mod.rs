@@ -21,7 +21,7 @@ pub mod objparse;
 
 mod hash;
 
-use crate::accel::{Accel, Hit, TraceStack};
+use crate::accel::{Accel, Hit, RayPacket, TraceStack, LANES};
 use crate::bsdf::Bsdf;
 use crate::camera::CameraDesc;
 use crate::environment::{EnvMap, Environment};
@@ -319,6 +319,25 @@ impl Scene {
                 .intersect_filtered(stack, (origin, dir, tmax), |p, b| self.opaque(p, b))
         } else {
             self.accel.intersect_with(stack, origin, dir, tmax)
+        }
+    }
+
+    /// [`Scene::intersect`] for each live lane of the packet `p`, into `out`: in lanes where
+    /// the accelerator packs them ([`crate::accel::Accel::packs`]) and the scene has no
+    /// cutouts, else ray by ray; the same hits either way, bit for bit.
+    #[inline]
+    pub fn intersect_packet(
+        &self,
+        stack: &mut TraceStack,
+        p: &RayPacket,
+        out: &mut [Option<Hit>; LANES],
+    ) {
+        if !self.cutouts {
+            return self.accel.intersect_packet(stack, p, out);
+        }
+        for lane in p.lanes() {
+            let (o, d, tmax) = p.ray(lane);
+            out[lane] = self.intersect(stack, o, d, tmax);
         }
     }
 
