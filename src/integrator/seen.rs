@@ -42,7 +42,7 @@ pub fn seen(
 /// [`seen`] of a camera ray of direction `dir` whose closest hit is `hit` (already traced, and
 /// counted: a packet's lane, [`seen_packet`]).
 #[inline]
-pub fn seen_at(scene: &Scene, dir: Vec3, hit: Option<Hit>) -> (Vec3, Seen) {
+fn seen_at(scene: &Scene, dir: Vec3, hit: Option<Hit>) -> (Vec3, Seen) {
     let Some(hit) = hit else {
         return (scene.environment().radiance(dir), Seen::Sky);
     };
