@@ -105,19 +105,9 @@ impl RayPacket {
 }
 
 impl Accel {
-    /// Whether [`Accel::intersect_packet`] and [`Accel::occluded_packet`] test a packet's rays
-    /// in lanes (a small scene on a CPU with AVX2, `packet.rs`) rather than one by one.
-    pub fn packs(&self) -> bool {
-        #[cfg(target_arch = "x86_64")]
-        if has_avx2() {
-            return self.small.is_some();
-        }
-        false
-    }
-
     /// The closest hit of each live lane of `p` into `out` (dead lanes untouched), as
     /// [`Accel::intersect_with`] gives it for that lane's ray, bit for bit: in lanes where the
-    /// accelerator [`Accel::packs`], else ray by ray on `stack`.
+    /// scene is small and the CPU has AVX2, else ray by ray on `stack`.
     #[inline]
     pub fn intersect_packet(
         &self,

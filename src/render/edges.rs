@@ -455,16 +455,12 @@ pub(super) fn seen_by_edge_rays(
         );
         packet[n] = camera.generate_ray(pixel, u);
         n += 1;
-        if n == LANES {
-            for e in seen_packet(scene, &packet, rays, stack) {
-                sum += e;
+        // a full packet, or the last rays
+        if n == LANES || k + 1 == first + m as u64 {
+            for e in &seen_packet(scene, &packet[..n], rays, stack)[..n] {
+                sum += *e;
             }
             n = 0;
-        }
-    }
-    if n > 0 {
-        for e in &seen_packet(scene, &packet[..n], rays, stack)[..n] {
-            sum += *e;
         }
     }
     sum / m as f32

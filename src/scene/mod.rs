@@ -323,7 +323,7 @@ impl Scene {
     }
 
     /// [`Scene::intersect`] for each live lane of the packet `p`, into `out`: in lanes where
-    /// the accelerator packs them ([`crate::accel::Accel::packs`]) and the scene has no
+    /// [`crate::accel::Accel::intersect_packet`] takes them so and the scene has no
     /// cutouts, else ray by ray; the same hits either way, bit for bit.
     #[inline]
     pub fn intersect_packet(
