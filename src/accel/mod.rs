@@ -20,9 +20,11 @@
 //!
 //! **Small scenes** (at most 16 blocks, 128 triangles, with AVX2) skip the tree (`small.rs`):
 //! a ray tests the blocks, 8 triangles at once, the closest hit shortening the ray as it goes,
-//! after a test of the blocks' boxes where they are expected to spare more than it costs; a
-//! shadow ray stops at the first block that blocks it (issue 49: every shipped scene of at most
-//! 128 triangles traces 1.18–1.62× as many rays a second; the measurements in `small.rs`).
+//! after a test of the blocks' boxes where they are expected to spare more than it costs (the
+//! triangles then regrouped, a room's walls in blocks of their own); a shadow ray stops at the
+//! first block that blocks it (issue 49: every shipped scene of at most 128 triangles traces
+//! 1.18–1.62× as many rays a second as through the tree, Mitsuba's box 1.2–1.3× more with the
+//! regrouping; the measurements in `small.rs`).
 //! **Packets** ([`RayPacket`], `packet.rs`): up to 8 rays through a small scene at once, a ray
 //! in each lane, each triangle tested against all of them; the same hits, bit for bit, as one
 //! by one (1.30× the closest-hit rate on the Cornell box's path rays, shadow rays unchanged).
@@ -59,7 +61,7 @@ use node::node_hits;
 use node::node_hits_avx2;
 pub use packet::{RayPacket, LANES};
 #[cfg(target_arch = "x86_64")]
-use small::BlockBoxes;
+use small::SmallScene;
 #[cfg(target_arch = "x86_64")]
 use small::{small_any_avx2, small_closest_avx2};
 use triangles::{closer, group_any, group_closest, hit_triangle, Tri, TriBlock};
@@ -219,10 +221,10 @@ fn ray_of(origin: Vec3, dir: Vec3, tmax: f32) -> Ray {
 }
 
 /// The ray of a small scene's walk: [`ray_of`]'s, but where the walk tests no box
-/// ([`BlockBoxes::culls`] false) without the inverse direction, which only a box test reads
+/// ([`SmallScene::culls`] false) without the inverse direction, which only a box test reads
 /// (the triangle test reads the origin, the direction and the interval): a division a ray less.
 #[inline(always)]
-fn small_ray(boxes: &BlockBoxes, origin: Vec3, dir: Vec3, tmax: f32) -> Ray {
+fn small_ray(boxes: &SmallScene, origin: Vec3, dir: Vec3, tmax: f32) -> Ray {
     if boxes.culls {
         return ray_of(origin, dir, tmax);
     }
@@ -269,8 +271,8 @@ pub struct Accel {
     blocks: Vec<TriBlock>,
     /// Their number.
     count: usize,
-    /// The blocks' boxes where they are few (`small.rs`): the walk without the tree.
-    small: Option<BlockBoxes>,
+    /// The blocks and their boxes where they are few (`small.rs`): the walk without the tree.
+    small: Option<SmallScene>,
     /// `order[i]` = input index of BVH-order triangle `i`.
     pub order: Vec<u32>,
     /// Wall time of the build (AABBs, PLOC, reinsertion, CWBVH conversion, reordering).
@@ -305,7 +307,7 @@ impl Accel {
         }
         Accel {
             bvh,
-            small: BlockBoxes::new(&blocks, order.len()),
+            small: SmallScene::new(&blocks, order.len()),
             blocks,
             count: order.len(),
             order,
@@ -486,13 +488,13 @@ impl Accel {
     #[target_feature(enable = "avx2")]
     fn closest_small_avx2(
         &self,
-        boxes: &BlockBoxes,
+        boxes: &SmallScene,
         (origin, dir, tmax): (Vec3, Vec3, f32),
         keep: impl Fn(u32, Vec2) -> bool,
     ) -> Option<Hit> {
         let mut ray = small_ray(boxes, origin, dir, tmax);
         let mut best = None;
-        small_closest_avx2(self, boxes, &mut ray, &mut best, &keep);
+        small_closest_avx2(boxes, &mut ray, &mut best, &keep);
         hit_of(best, ray.tmax)
     }
 
@@ -509,7 +511,7 @@ impl Accel {
     ) -> bool {
         if let Some(boxes) = &self.small {
             let ray = small_ray(boxes, origin, dir, tmax);
-            return small_any_avx2(self, boxes, &ray, &keep);
+            return small_any_avx2(boxes, &ray, &keep);
         }
         any_walk!(
             self,

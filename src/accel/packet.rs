@@ -20,7 +20,7 @@
 #[cfg(target_arch = "x86_64")]
 use super::has_avx2;
 #[cfg(target_arch = "x86_64")]
-use super::small::BlockBoxes;
+use super::small::SmallScene;
 #[cfg(target_arch = "x86_64")]
 use super::triangles::{hit_triangle, lane_test_avx2};
 use super::{positive_zeros, Accel, Hit, TraceStack};
@@ -120,7 +120,7 @@ impl Accel {
             if let Some(boxes) = &self.small {
                 // SAFETY: the CPU has AVX2, all the function asks
                 #[allow(unsafe_code)]
-                let r = unsafe { packet_closest_avx2(self, boxes, p) };
+                let r = unsafe { packet_closest_avx2(boxes, p) };
                 for lane in p.lanes() {
                     out[lane] = lane_hit(self, p, lane, r[lane]);
                 }
@@ -142,7 +142,7 @@ impl Accel {
             if let Some(boxes) = &self.small {
                 // SAFETY: the CPU has AVX2, all the function asks
                 #[allow(unsafe_code)]
-                return unsafe { packet_any_avx2(self, boxes, p) };
+                return unsafe { packet_any_avx2(boxes, p) };
             }
         }
         p.lanes()
@@ -154,16 +154,16 @@ impl Accel {
     }
 }
 
-/// The closest hit of every live lane of `p` through the blocks of `acc` (a small scene): per
-/// lane the BVH-order triangle (−1 for none). Two running hits a lane, the even and the odd
-/// triangles' (each its triangles in increasing index, so the rule of `closer` is its `t`, then
-/// facing the ray), merged at the end by the whole rule: a single running hit made every
-/// triangle's test wait on the last one's update of `tmax` (a chain the core cannot overlap),
-/// and a branch on "any lane closer" mispredicted.
+/// The closest hit of every live lane of `p` through the blocks of a small scene: per lane the
+/// BVH-order triangle (−1 for none). Two running hits a lane, the even and the odd lanes' of
+/// each block (each kept by the whole rule of `closer`: the blocks may hold their triangles in
+/// any order), merged at the end by the same rule: a single running hit made every triangle's
+/// test wait on the last one's update of `tmax` (a chain the core cannot overlap), and a branch
+/// on "any lane closer" mispredicted.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[inline]
-pub(super) fn packet_closest_avx2(acc: &Accel, boxes: &BlockBoxes, p: &RayPacket) -> [i32; LANES] {
+pub(super) fn packet_closest_avx2(scene: &SmallScene, p: &RayPacket) -> [i32; LANES] {
     use std::arch::x86_64::*;
     // SAFETY: a row is 8 f32s at a 32-byte boundary (RayPacket is align(32))
     #[allow(unsafe_code)]
@@ -176,23 +176,23 @@ pub(super) fn packet_closest_avx2(acc: &Accel, boxes: &BlockBoxes, p: &RayPacket
     let mut even = (load(&p.tmax), none, _mm256_setzero_ps());
     let mut odd = even;
     let ray = (ox, oy, oz, dx, dy, dz, live);
-    let inv = boxes.culls.then(|| inverses(dx, dy, dz));
-    let count = acc.count;
-    for (k, block) in acc.blocks.iter().enumerate() {
+    let inv = scene.culls.then(|| inverses(dx, dy, dz));
+    for (k, block) in scene.blocks.iter().enumerate() {
         if let Some(inv) = inv {
             // a lane's closest so far is the nearer of its two running hits
             let tmax = _mm256_min_ps(even.0, odd.0);
-            if !enters(boxes, k, (ox, oy, oz), inv, tmax, live) {
+            if !enters(scene, k, (ox, oy, oz), inv, tmax, live) {
                 continue;
             }
         }
-        let n = (count - 8 * k).min(8);
+        // a block's triangles fill its lanes from the first
+        let (ids, n) = (&scene.ids[k], scene.full[k].count_ones() as usize);
         for i in (0..n).step_by(2) {
             let (ta, ia, fa) = &mut even;
-            closest_lane(block, i, (8 * k + i) as i32, ray, (ta, ia, fa));
+            closest_lane(block, i, ids[i] as i32, ray, (ta, ia, fa));
             if i + 1 < n {
                 let (tb, ib, fb) = &mut odd;
-                closest_lane(block, i + 1, (8 * k + i + 1) as i32, ray, (tb, ib, fb));
+                closest_lane(block, i + 1, ids[i + 1] as i32, ray, (tb, ib, fb));
             }
         }
     }
@@ -225,7 +225,7 @@ pub(super) fn packet_closest_avx2(acc: &Accel, boxes: &BlockBoxes, p: &RayPacket
 
 /// Triangle `i` of `block` (BVH-order index `id`) tested against the rays of a packet
 /// (origins, directions, live lanes) and taken into the running hit `(tmax, triangle, faces
-/// the ray)` of each lane it is closer in, by the rule of `closer` for increasing indices.
+/// the ray)` of each lane it is closer in, by the rule of `closer`.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[inline]
@@ -255,26 +255,36 @@ fn closest_lane(
     let (det, t) = (test.det, test.t);
     let ok = _mm256_and_ps(live, test.verdict(_mm256_setzero_ps(), *tmax));
     let front = _mm256_cmp_ps::<_CMP_GT_OQ>(det, _mm256_setzero_ps());
-    // closer: nearer, or as near, facing the ray where the best so far does not
+    // closer: nearer, or as near and facing the ray where the best so far does not, or
+    // facing as it does with a lower index
+    let id = _mm256_set1_epi32(id);
+    let same_side = _mm256_xor_ps(
+        _mm256_xor_ps(*best_front, front),
+        _mm256_castsi256_ps(_mm256_set1_epi32(-1)),
+    );
+    let lower = _mm256_castsi256_ps(_mm256_cmpgt_epi32(*best, id));
     let tie = _mm256_and_ps(
         _mm256_cmp_ps::<_CMP_EQ_OQ>(t, *tmax),
         _mm256_and_ps(
             _mm256_castsi256_ps(_mm256_cmpgt_epi32(*best, _mm256_set1_epi32(-1))),
-            _mm256_andnot_ps(*best_front, front),
+            _mm256_or_ps(
+                _mm256_andnot_ps(*best_front, front),
+                _mm256_and_ps(same_side, lower),
+            ),
         ),
     );
     let take = _mm256_and_ps(ok, _mm256_or_ps(_mm256_cmp_ps::<_CMP_LT_OQ>(t, *tmax), tie));
     *tmax = _mm256_blendv_ps(*tmax, t, take);
     *best_front = _mm256_blendv_ps(*best_front, front, take);
-    let id = _mm256_castsi256_ps(_mm256_set1_epi32(id));
+    let id = _mm256_castsi256_ps(id);
     *best = _mm256_castps_si256(_mm256_blendv_ps(_mm256_castsi256_ps(*best), id, take));
 }
 
-/// The live lanes of `p` that some triangle of `acc` (a small scene) blocks, a bit each.
+/// The live lanes of `p` that some triangle of a small scene blocks, a bit each.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[inline]
-pub(super) fn packet_any_avx2(acc: &Accel, boxes: &BlockBoxes, p: &RayPacket) -> u32 {
+pub(super) fn packet_any_avx2(scene: &SmallScene, p: &RayPacket) -> u32 {
     use std::arch::x86_64::*;
     // SAFETY: as in packet_closest_avx2
     #[allow(unsafe_code)]
@@ -283,15 +293,14 @@ pub(super) fn packet_any_avx2(acc: &Accel, boxes: &BlockBoxes, p: &RayPacket) ->
     let (dx, dy, dz) = (load(&p.d[0]), load(&p.d[1]), load(&p.d[2]));
     let tmax = load(&p.tmax);
     let mut open = lane_mask(p.live);
-    let inv = boxes.culls.then(|| inverses(dx, dy, dz));
-    let count = acc.count;
-    for (k, block) in acc.blocks.iter().enumerate() {
+    let inv = scene.culls.then(|| inverses(dx, dy, dz));
+    for (k, block) in scene.blocks.iter().enumerate() {
         if let Some(inv) = inv {
-            if !enters(boxes, k, (ox, oy, oz), inv, tmax, open) {
+            if !enters(scene, k, (ox, oy, oz), inv, tmax, open) {
                 continue;
             }
         }
-        for i in 0..(count - 8 * k).min(8) {
+        for i in 0..scene.full[k].count_ones() as usize {
             let tri = std::array::from_fn(|row| _mm256_set1_ps(block.rows[row][i]));
             let test = lane_test_avx2(tri, [ox, oy, oz], [dx, dy, dz]);
             let blocked = _mm256_and_ps(open, test.verdict(_mm256_setzero_ps(), tmax));
@@ -343,7 +352,7 @@ fn inverses(
 #[target_feature(enable = "avx2")]
 #[inline]
 fn enters(
-    boxes: &BlockBoxes,
+    boxes: &SmallScene,
     k: usize,
     o: (
         std::arch::x86_64::__m256,

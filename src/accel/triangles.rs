@@ -319,29 +319,30 @@ pub(super) fn group_closest_avx2(
     keep: &impl Fn(u32, Vec2) -> bool,
 ) {
     for (block, lanes) in group_blocks(base, bits) {
-        block_closest_avx2(acc, (block, lanes), ray, best, keep);
+        let id = |i: usize| (block * 8 + i) as u32;
+        block_closest_avx2(&acc.blocks[block], (lanes, id), ray, best, keep);
     }
 }
 
-/// The hits of block `block`'s triangles in `lanes` (a bit a lane), tested at once
-/// ([`block_hits_avx2`]), taken into the closest kept hit `best`: one that [`closer`] prefers
-/// and `keep` accepts shortens the ray and becomes `best`.
+/// The hits of the triangles of `b` in `lanes` (a bit a lane; lane `i`'s BVH-order index
+/// `id(i)`), tested at once ([`block_hits_avx2`]), taken into the closest kept hit `best`: one
+/// that [`closer`] prefers and `keep` accepts shortens the ray and becomes `best`.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[inline]
 pub(super) fn block_closest_avx2(
-    acc: &Accel,
-    (block, lanes): (usize, u32),
+    b: &TriBlock,
+    (lanes, id): (u32, impl Fn(usize) -> u32),
     ray: &mut Ray,
     best: &mut Option<(u32, Vec2, f32)>,
     keep: &impl Fn(u32, Vec2) -> bool,
 ) {
-    let (hits, [t, nu, nv, det]) = block_hits_avx2(&acc.blocks[block], ray);
+    let (hits, [t, nu, nv, det]) = block_hits_avx2(b, ray);
     let mut hits = hits & lanes;
     while hits != 0 {
         let i = hits.trailing_zeros() as usize;
         hits &= hits - 1;
-        let id = (block * 8 + i) as u32;
+        let id = id(i);
         let n = Vec2::new(nu[i], nv[i]);
         if closer((t[i], det[i], id), ray.tmax, best) && keep(id, n / det[i]) {
             ray.tmax = t[i];
@@ -361,25 +362,29 @@ pub(super) fn group_any_avx2(
     ray: &Ray,
     keep: &impl Fn(u32, Vec2) -> bool,
 ) -> bool {
-    group_blocks(base, bits).any(|b| block_any_avx2(acc, b, ray, keep))
+    group_blocks(base, bits).any(|(block, lanes)| {
+        let id = |i: usize| (block * 8 + i) as u32;
+        block_any_avx2(&acc.blocks[block], (lanes, id), ray, keep)
+    })
 }
 
-/// Whether a triangle of block `block` in `lanes` blocks `ray` and `keep` accepts it.
+/// Whether a triangle of `b` in `lanes` (lane `i`'s BVH-order index `id(i)`) blocks `ray` and
+/// `keep` accepts it.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[inline]
 pub(super) fn block_any_avx2(
-    acc: &Accel,
-    (block, lanes): (usize, u32),
+    b: &TriBlock,
+    (lanes, id): (u32, impl Fn(usize) -> u32),
     ray: &Ray,
     keep: &impl Fn(u32, Vec2) -> bool,
 ) -> bool {
-    let (hits, [_, nu, nv, det]) = block_hits_avx2(&acc.blocks[block], ray);
+    let (hits, [_, nu, nv, det]) = block_hits_avx2(b, ray);
     let mut hits = hits & lanes;
     while hits != 0 {
         let i = hits.trailing_zeros() as usize;
         hits &= hits - 1;
-        if keep((block * 8 + i) as u32, Vec2::new(nu[i], nv[i]) / det[i]) {
+        if keep(id(i), Vec2::new(nu[i], nv[i]) / det[i]) {
             return true;
         }
     }
