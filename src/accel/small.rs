@@ -165,8 +165,11 @@ impl SmallScene {
         for g in groups(&bounds).into_iter().filter(|g| !g.is_empty()) {
             walks.push((culled_cost(&g), true, g));
         }
+        // (a cost from non-finite coordinates is NaN: that walk is not taken; the first's is
+        // a count of blocks)
         let (_, culls, mut grouping) = walks
             .into_iter()
+            .filter(|w| !w.0.is_nan())
             .min_by(|a, b| a.0.total_cmp(&b.0))
             .expect("one walk at least");
         if culls {

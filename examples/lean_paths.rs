@@ -1,0 +1,197 @@
+//! What vrpt's integrator costs beyond its rays (issue 49): Mitsuba's estimator — independent
+//! points, next-event estimation with points on the lights by area, cosine-weighted bounces,
+//! Russian roulette from the third bounce, no MIS — written as one lean loop over a diffuse
+//! scene, against vrpt's renderer with the same estimator (`--sampler independent --directions
+//! cosine --lights nee --light-points area --edge-rays 0`), on one thread, in turn (A B A B).
+//! Both trace with the same [`vrpt::accel::Accel`]; the loop has none of the renderer's
+//! generality (materials, shading normals, textures, the sampler's dimensions, the film's
+//! variance, the statistics), so the difference of their rates is what that generality costs
+//! a sample. Both estimate the same image: their means are printed side by side.
+//!
+//! The estimator at a vertex `x` (normal `n` turned toward the ray, diffuse reflectance `ρ`):
+//! a point `y` on the emitters chosen by area (pdf `1/A` over their total area `A`), added
+//! unless something blocks the segment: `β · ρ/π · Le · cos θ_x · cos θ_y / |y − x|² · A`; then
+//! a cosine-weighted direction (`β ← β·ρ`); emission counts only where a camera ray meets it
+//! (front side). A path has at most `max_depth` vertices, as the renderer's.
+//!
+//! `cargo run --release --example lean_paths -- SCENE [SPP] [ROUNDS]` (a scene of diffuse
+//! materials, without textures or vertex normals; its camera, size and depth). On Mitsuba's box
+//! (`tools/peers/mitsuba_race.py` writes it), 256², 64 spp, 2026-11-30: the loop 3.31–3.33 M
+//! samples/s, the renderer 1.72–1.77 ([performance](../docs/performance.md)).
+
+use glam::{UVec2, Vec2, Vec3};
+use std::f32::consts::{FRAC_1_PI, TAU};
+use std::time::Instant;
+use vrpt::accel::TraceStack;
+use vrpt::camera::Camera;
+use vrpt::render::{render, NoProgress, RenderSettings};
+use vrpt::scene::Scene;
+use vrpt::strategy::Strategy;
+
+/// What the loop reads of a triangle (BVH order), and the emitters.
+struct Tables {
+    /// Unit geometric normal, `(v1 − v0) × (v2 − v0)` normalised (OBJ's front side).
+    ng: Vec<Vec3>,
+    kd: Vec<Vec3>,
+    ke: Vec<Vec3>,
+    /// The emissive triangles, their radiance and the running sum of their areas.
+    lights: Vec<([Vec3; 3], Vec3, f32)>,
+}
+
+impl Tables {
+    fn of(scene: &Scene) -> Result<Tables, String> {
+        let mut t = Tables {
+            ng: vec![],
+            kd: vec![],
+            ke: vec![],
+            lights: vec![],
+        };
+        let mut area = 0.0;
+        for prim in 0..scene.accel.len() as u32 {
+            let v = scene.accel.vertices(prim);
+            let m = &scene.materials[scene.shading[prim as usize].material as usize];
+            let maps = m.maps.colour() || m.maps.perturbs_normal() || m.maps.opacity.is_some();
+            if m.ks() != Vec3::ZERO || m.specular.is_some() || maps {
+                return Err(format!("material {} is not plain diffuse", m.name));
+            }
+            let s = &scene.shading[prim as usize];
+            if s.normals.iter().any(|&n| n != s.ng) {
+                return Err(format!("triangle {prim} has vertex normals"));
+            }
+            let c = (v[1] - v[0]).cross(v[2] - v[0]);
+            t.ng.push(c.normalize_or_zero());
+            t.kd.push(m.kd());
+            t.ke.push(m.emission);
+            if m.emission.max_element() > 0.0 {
+                area += 0.5 * c.length();
+                t.lights.push((v, m.emission, area));
+            }
+        }
+        if t.lights.is_empty() {
+            return Err("the scene has no emitting triangle".into());
+        }
+        Ok(t)
+    }
+}
+
+/// xorshift32: the loop's stream of uniform numbers in [0, 1).
+struct Rng(u32);
+
+impl Rng {
+    fn next(&mut self) -> f32 {
+        let mut x = self.0;
+        x ^= x << 13;
+        x ^= x >> 17;
+        x ^= x << 5;
+        self.0 = x;
+        (x >> 8) as f32 * (1.0 / 16_777_216.0)
+    }
+}
+
+/// The image (a sum of radiance a pixel) of `spp` paths a pixel.
+fn lean(scene: &Scene, t: &Tables, (w, h, spp, depth): (u32, u32, u32, u32)) -> Vec<Vec3> {
+    let camera = Camera::new(&scene.camera, w, h).expect("the scene's camera");
+    let eps = scene.ray_epsilon;
+    let total_area = t.lights.last().map_or(0.0, |l| l.2);
+    let mut rng = Rng(0x9E37_79B9);
+    let mut stack = TraceStack::default();
+    let mut film = vec![Vec3::ZERO; (w * h) as usize];
+    for (pixel, sum) in film.iter_mut().enumerate() {
+        let at = UVec2::new(pixel as u32 % w, pixel as u32 / w);
+        for _ in 0..spp {
+            let (mut o, mut d) = camera.generate_ray(at, Vec2::new(rng.next(), rng.next()));
+            let (mut beta, mut vertex) = (Vec3::ONE, 0);
+            while let Some(hit) = scene.accel.intersect_with(&mut stack, o, d, f32::INFINITY) {
+                let prim = hit.prim as usize;
+                let (ng, kd) = (t.ng[prim], t.kd[prim]);
+                let p = o + d * hit.t;
+                let n = if ng.dot(d) < 0.0 { ng } else { -ng };
+                if vertex == 0 && ng.dot(d) < 0.0 {
+                    *sum += beta * t.ke[prim];
+                }
+                let (u0, u1, u2) = (rng.next(), rng.next(), rng.next());
+                if vertex + 1 < depth {
+                    let pick = u0 * total_area;
+                    let (v, le, _) = t.lights.iter().find(|l| pick < l.2).unwrap_or(&t.lights[0]);
+                    let s = u1.sqrt();
+                    let y = v[0] * s * (1.0 - u2) + v[1] * (1.0 - s) + v[2] * (s * u2);
+                    let ny = (v[1] - v[0]).cross(v[2] - v[0]).normalize_or_zero();
+                    let (to, d2) = (y - p, (y - p).length_squared());
+                    let dist = d2.sqrt();
+                    let wi = to / dist;
+                    let (cx, cy) = (n.dot(wi), -ny.dot(wi));
+                    let from = p + n * eps;
+                    if cx > 0.0
+                        && cy > 0.0
+                        && !scene.accel.occluded_with(&mut stack, from, wi, dist - 2.0 * eps)
+                    {
+                        *sum += beta * kd * *le * (cx * cy / d2 * total_area * FRAC_1_PI);
+                    }
+                }
+                let (b0, b1, rr) = (rng.next(), rng.next(), rng.next());
+                let (sin, cos) = (b0 * TAU).sin_cos();
+                let r = b1.sqrt();
+                let local = Vec3::new(r * cos, r * sin, (1.0 - b1).max(0.0).sqrt());
+                d = vrpt::math::Frame::from_normal(n).to_world(local);
+                o = p + n * eps;
+                beta *= kd;
+                vertex += 1;
+                if vertex >= depth {
+                    break;
+                }
+                if vertex >= 3 {
+                    let q = beta.max_element().min(0.95);
+                    if rr >= q {
+                        break;
+                    }
+                    beta /= q;
+                }
+            }
+        }
+    }
+    film
+}
+
+fn mean(image: &[Vec3], scale: f32) -> Vec3 {
+    image.iter().fold(Vec3::ZERO, |a, &b| a + b) / (image.len() as f32 * scale)
+}
+
+fn main() -> Result<(), String> {
+    let args: Vec<String> = std::env::args().collect();
+    let Some(path) = args.get(1) else {
+        return Err("usage: lean_paths SCENE [SPP] [ROUNDS]".into());
+    };
+    let number = |i: usize, default: u32| {
+        args.get(i).map_or(Ok(default), |s| {
+            s.parse::<u32>()
+                .ok()
+                .filter(|&n| n > 0)
+                .ok_or(format!("{s}: not a positive whole number"))
+        })
+    };
+    let (spp, rounds) = (number(2, 64)?, number(3, 3)?);
+    let scene = vrpt::scene::load(std::path::Path::new(path)).map_err(|e| e.to_string())?;
+    let tables = Tables::of(&scene)?;
+    let mut settings = RenderSettings::for_scene(&scene);
+    settings.spp = spp;
+    settings.threads = Some(1);
+    settings.edge_rays = 0;
+    settings.strategy = Strategy::parse("independent+cosine+nee+area+tree")?;
+    let (w, h, depth) = (settings.width, settings.height, settings.max_depth);
+    let samples = (w * h * spp) as f64;
+    for round in 1..=rounds {
+        let start = Instant::now();
+        let image = lean(&scene, &tables, (w, h, spp, depth));
+        let lean_rate = samples / start.elapsed().as_secs_f64() / 1e6;
+        let (film, stats) = render(&scene, &settings, &NoProgress).map_err(|e| e.to_string())?;
+        let vrpt_rate = stats.samples as f64 / stats.elapsed.as_secs_f64() / 1e6;
+        println!(
+            "round {round}: lean loop {lean_rate:.3} M samples/s, mean {}; renderer {vrpt_rate:.3} \
+             M samples/s, mean {}; renderer/loop time {:.2}",
+            mean(&image, spp as f32),
+            mean(&film.mean_image(), 1.0),
+            lean_rate / vrpt_rate
+        );
+    }
+    Ok(())
+}
