@@ -123,7 +123,9 @@ fn lean(scene: &Scene, t: &Tables, (w, h, spp, depth): (u32, u32, u32, u32)) -> 
                     let from = p + n * eps;
                     if cx > 0.0
                         && cy > 0.0
-                        && !scene.accel.occluded_with(&mut stack, from, wi, dist - 2.0 * eps)
+                        && !scene
+                            .accel
+                            .occluded_with(&mut stack, from, wi, dist - 2.0 * eps)
                     {
                         *sum += beta * kd * *le * (cx * cy / d2 * total_area * FRAC_1_PI);
                     }
