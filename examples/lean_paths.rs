@@ -15,9 +15,11 @@
 //! (front side). A path has at most `max_depth` vertices, as the renderer's.
 //!
 //! `cargo run --release --example lean_paths -- SCENE [SPP] [ROUNDS]` (a scene of diffuse
-//! materials, without textures or vertex normals; its camera, size and depth). On Mitsuba's box
-//! (`tools/peers/mitsuba_race.py` writes it), 256², 64 spp, 2026-11-30: the loop 3.31–3.33 M
-//! samples/s, the renderer 1.72–1.77 ([performance](../docs/performance.md)).
+//! materials, without textures or vertex normals, lit by one emitter — a triangle, or a quad the
+//! renderer samples as one rectangle — and a black environment; its camera, size and depth: on
+//! these the two choose the same points on the light). On Mitsuba's box
+//! (`tools/peers/mitsuba_race.py` writes it), 256², 64 spp, 2026-11-30: the loop 3.03–3.10 M
+//! samples/s, the renderer 1.72–1.76 ([performance](../docs/performance.md)).
 
 use glam::{UVec2, Vec2, Vec3};
 use std::f32::consts::{FRAC_1_PI, TAU};
@@ -67,8 +69,11 @@ impl Tables {
                 t.lights.push((v, m.emission, area));
             }
         }
-        if t.lights.is_empty() {
-            return Err("the scene has no emitting triangle".into());
+        if t.lights.is_empty() || scene.lights.emitters.len() != 1 {
+            return Err("the loop needs one emitter (a triangle or a quad)".into());
+        }
+        if scene.environment().luminance_integral() > 0.0 {
+            return Err("the loop needs a black environment".into());
         }
         Ok(t)
     }
@@ -90,12 +95,14 @@ impl Rng {
 
 /// The image (a sum of radiance a pixel) of `spp` paths a pixel.
 fn lean(scene: &Scene, t: &Tables, (w, h, spp, depth): (u32, u32, u32, u32)) -> Vec<Vec3> {
-    let camera = Camera::new(&scene.camera, w, h).expect("the scene's camera");
+    let Some(camera) = Camera::new(&scene.camera, w, h) else {
+        return vec![]; // a degenerate camera: the renderer says so
+    };
     let eps = scene.ray_epsilon;
     let total_area = t.lights.last().map_or(0.0, |l| l.2);
     let mut rng = Rng(0x9E37_79B9);
     let mut stack = TraceStack::default();
-    let mut film = vec![Vec3::ZERO; (w * h) as usize];
+    let mut film = vec![Vec3::ZERO; w as usize * h as usize];
     for (pixel, sum) in film.iter_mut().enumerate() {
         let at = UVec2::new(pixel as u32 % w, pixel as u32 / w);
         for _ in 0..spp {
@@ -109,23 +116,30 @@ fn lean(scene: &Scene, t: &Tables, (w, h, spp, depth): (u32, u32, u32, u32)) -> 
                 if vertex == 0 && ng.dot(d) < 0.0 {
                     *sum += beta * t.ke[prim];
                 }
+                if kd == Vec3::ZERO {
+                    break; // black: nothing more to gather (the renderer ends there too)
+                }
                 let (u0, u1, u2) = (rng.next(), rng.next(), rng.next());
                 if vertex + 1 < depth {
                     let pick = u0 * total_area;
-                    let (v, le, _) = t.lights.iter().find(|l| pick < l.2).unwrap_or(&t.lights[0]);
+                    let last = &t.lights[t.lights.len() - 1];
+                    let (v, le, _) = t.lights.iter().find(|l| pick < l.2).unwrap_or(last);
                     let s = u1.sqrt();
                     let y = v[0] * s * (1.0 - u2) + v[1] * (1.0 - s) + v[2] * (s * u2);
                     let ny = (v[1] - v[0]).cross(v[2] - v[0]).normalize_or_zero();
                     let (to, d2) = (y - p, (y - p).length_squared());
-                    let dist = d2.sqrt();
-                    let wi = to / dist;
+                    let wi = to / d2.sqrt();
                     let (cx, cy) = (n.dot(wi), -ny.dot(wi));
+                    // the shadow ray from the offset point to y, as the renderer traces it
                     let from = p + n * eps;
+                    let len = (y - from).length();
+                    let tmax = len - 2.0 * eps;
                     if cx > 0.0
                         && cy > 0.0
+                        && tmax > 0.0
                         && !scene
                             .accel
-                            .occluded_with(&mut stack, from, wi, dist - 2.0 * eps)
+                            .occluded_with(&mut stack, from, (y - from) / len, tmax)
                     {
                         *sum += beta * kd * *le * (cx * cy / d2 * total_area * FRAC_1_PI);
                     }
@@ -180,7 +194,10 @@ fn main() -> Result<(), String> {
     settings.edge_rays = 0;
     settings.strategy = Strategy::parse("independent+cosine+nee+area+tree")?;
     let (w, h, depth) = (settings.width, settings.height, settings.max_depth);
-    let samples = (w * h * spp) as f64;
+    let samples = w as f64 * h as f64 * spp as f64;
+    if Camera::new(&scene.camera, w, h).is_none() {
+        return Err("the scene's camera is degenerate".into());
+    }
     for round in 1..=rounds {
         let start = Instant::now();
         let image = lean(&scene, &tables, (w, h, spp, depth));

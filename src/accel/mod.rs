@@ -21,10 +21,10 @@
 //! **Small scenes** (at most 16 blocks, 128 triangles, with AVX2) skip the tree (`small.rs`):
 //! a ray tests the blocks, 8 triangles at once, the closest hit shortening the ray as it goes,
 //! after a test of the blocks' boxes where they are expected to spare more than it costs (the
-//! triangles then regrouped, a room's walls in blocks of their own); a shadow ray stops at the
-//! first block that blocks it (issue 49: every shipped scene of at most 128 triangles traces
-//! 1.18–1.62× as many rays a second as through the tree, Mitsuba's box 1.2–1.3× more with the
-//! regrouping; the measurements in `small.rs`).
+//! triangles regrouped where that spares more, a room's walls in blocks of their own); a shadow
+//! ray stops at the first block that blocks it (issue 49: every shipped scene of at most 128
+//! triangles traces 1.18–1.62× as many rays a second as through the tree, Mitsuba's box
+//! 1.2–1.3× more with the regrouping; the measurements in `small.rs`).
 //! **Packets** ([`RayPacket`], `packet.rs`): up to 8 rays through a small scene at once, a ray
 //! in each lane, each triangle tested against all of them; the same hits, bit for bit, as one
 //! by one (1.30× the closest-hit rate on the Cornell box's path rays, shadow rays unchanged).
@@ -331,12 +331,18 @@ impl Accel {
         self.blocks[prim as usize / 8].get(prim as usize % 8)
     }
 
-    /// Bytes held by the BVH nodes, the index map and the triangles.
+    /// Bytes held by the BVH nodes, the index map and the triangles (a small scene's second
+    /// copy of them for its walk included).
     pub fn memory_bytes(&self) -> usize {
         std::mem::size_of_val(self.bvh.nodes.as_slice())
             + std::mem::size_of_val(self.bvh.primitive_indices.as_slice())
             + std::mem::size_of_val(self.order.as_slice())
             + std::mem::size_of_val(self.blocks.as_slice())
+            + self.small.as_ref().map_or(0, |s| {
+                std::mem::size_of_val(s.blocks.as_slice())
+                    + std::mem::size_of_val(s.ids.as_slice())
+                    + std::mem::size_of_val(s.full.as_slice())
+            })
     }
 
     /// The vertices of BVH-order triangle `prim`.

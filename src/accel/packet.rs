@@ -2,10 +2,10 @@
 //! vector (issue 49): every triangle of the scene is broadcast and tested against the 8 rays
 //! at once, by [`super::triangles::hit_triangle`]'s arithmetic operation for operation (a
 //! multiply then an add, never fused; the same division), so each lane's verdict, `t` and
-//! barycentric numerators are the scalar test's bits. The closest hit keeps the rule of
-//! [`super::triangles::closer`]: the triangles come in increasing index, so a later hit at
-//! the same `t` wins only by facing the ray where the hit so far does not; the result is the
-//! scalar walk's hit, bit for bit. A shadow packet ends when every live lane is blocked.
+//! barycentric numerators are the scalar test's bits. The closest hit keeps the whole rule of
+//! [`super::triangles::closer`] (at the same `t`, the face turned toward the ray, then the
+//! lower BVH index: a block's triangles may come in any order), so the result is the scalar
+//! walk's hit, bit for bit. A shadow packet ends when every live lane is blocked.
 //!
 //! Where a walk tests the blocks' boxes first (`small.rs`), a packet skips a block whose box
 //! none of its live rays enters before its closest hit so far: skipping a block that holds no

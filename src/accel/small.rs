@@ -131,7 +131,8 @@ pub(super) struct SmallScene {
     pub(super) lanes: u32,
     /// Whether the boxes are tested first ([`SmallScene::new`] says when).
     pub(super) culls: bool,
-    /// The triangles, regrouped where the boxes are tested first, else in BVH order.
+    /// The triangles: a regrouping ([`groups`]) or the BVH order's blocks (where the boxes are
+    /// tested first, in the order of their boxes' areas).
     pub(super) blocks: Vec<TriBlock>,
     /// The BVH-order index of each block's lanes' triangles.
     pub(super) ids: Vec<[u32; 8]>,

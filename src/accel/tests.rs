@@ -423,7 +423,8 @@ fn flat_blocks_keep_their_ties() {
 /// coincident triangles (ties of `t`, facing the same way and the other way), with the
 /// blocks' boxes tested first and not, rays of every direction (zero components of either
 /// sign), short and infinite `tmax`, and packets with dead lanes between live ones (whose
-/// stale rays must not count); and ray by ray on a scene too large for packets.
+/// stale rays must not count), the rays' own walks checked against every triangle tested in
+/// order; and ray by ray on a scene too large for packets.
 #[test]
 fn packets_give_each_rays_hit() {
     // every fourth triangle four times, twice each way round: the build puts coincident
@@ -438,15 +439,22 @@ fn packets_give_each_rays_hit() {
     let mut rng = SmallRng::seed_from_u64(6);
     let mut stack = TraceStack::default();
     let (mut hits, mut blocked, mut lanes) = (0, 0, 0);
-    let mut cases: Vec<_> = small_walks(&Accel::build(&tris), 66)
+    let mut small_scene = Accel::build(&tris);
+    let mut cases: Vec<_> = small_walks(&small_scene, 66)
         .into_iter()
-        .map(|(walk, small)| (&tris, walk, Some(small)))
+        .map(|(walk, small)| (walk, Some(small)))
         .collect();
-    cases.push((&large, "large", None));
-    for (scene, walk, small) in cases {
-        let mut accel = Accel::build(scene);
-        assert_eq!(accel.small.is_some(), small.is_some());
-        accel.small = small;
+    cases.push(("large", None));
+    let large_scene = Accel::build(&large);
+    assert!(large_scene.small.is_none());
+    for (walk, small) in cases {
+        let (accel, scene) = match small {
+            Some(s) => {
+                small_scene.small = Some(s);
+                (&small_scene, &tris)
+            }
+            None => (&large_scene, &large),
+        };
         let mut p = RayPacket::new();
         for i in 0..3000 {
             // a fresh packet's lanes: live ones at random, a dead lane keeps its old ray
@@ -478,6 +486,11 @@ fn packets_give_each_rays_hit() {
                     bits(want),
                     "packet {i}, lane {lane}, {walk}"
                 );
+                if accel.small.is_some() {
+                    // the walk itself against every triangle tested in index order
+                    let brute = accel.intersect_brute_force(o, d, tmax);
+                    assert_eq!(bits(want), bits(brute), "packet {i}, lane {lane}, {walk}");
+                }
                 let occluded = accel.occluded_with(&mut stack, o, d, tmax);
                 assert_eq!(
                     blocking & (1 << lane) != 0,
@@ -508,6 +521,7 @@ fn groups_partition_the_triangles() {
             .filter(|&k| !groupings[k].is_empty())
             .collect();
         // from a group a triangle down, every count up to 16 passes, to the fewest reached
+        assert!(!made.is_empty(), "{n}: no grouping of 16 or fewer");
         let fewest = made[0];
         assert!(
             fewest >= n.div_ceil(8) && fewest <= n.div_ceil(8) + 2,
@@ -528,7 +542,8 @@ fn groups_partition_the_triangles() {
 
 /// A room as Mitsuba's box is built (five walls and a light, each a quad of two triangles, and
 /// two boxes of 12) is walked wall by wall: its walk tests the blocks' boxes first, over more
-/// blocks than the fewest (5), and each quad's two triangles share a block.
+/// blocks than the fewest (5), each quad's two triangles share a block, and no wall shares one
+/// with a box's face out of its plane.
 #[test]
 fn a_room_is_walked_wall_by_wall() {
     let quad = |o: Vec3, u: Vec3, v: Vec3| [[o, o + u, o + u + v], [o, o + u + v, o + v]];
@@ -574,5 +589,19 @@ fn a_room_is_walked_wall_by_wall() {
     for q in 0..quads.len() {
         assert_eq!(block_of[2 * q], block_of[2 * q + 1], "quad {q}");
         assert!(block_of[2 * q] < small.blocks.len());
+    }
+    // the walls are quads 0–4, the boxes' faces quads 6 on (triangles 12 on): a wall's block
+    // holds no box face but one in its plane (the boxes' bottoms lie on the floor)
+    for wall in 0..5 {
+        let k = block_of[2 * wall];
+        let [a, b, c] = tris[2 * wall];
+        let n = (b - a).cross(c - a).normalize();
+        for (i, t) in tris.iter().enumerate().skip(12) {
+            let in_plane = t.iter().all(|&v| (v - a).dot(n).abs() < 1e-5);
+            assert!(
+                block_of[i] != k || in_plane,
+                "wall {wall} shares a block with a box"
+            );
+        }
     }
 }

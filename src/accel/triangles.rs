@@ -60,9 +60,10 @@ pub(super) struct Tri {
     pub(super) ng: Vec3A,
 }
 
-/// Eight triangles (BVH-order indices `8k .. 8k + 8` of block `k`), each coordinate a row of 8
-/// lanes: rows 0–2 `v0`, 3–5 `e1`, 6–8 `e2`, 9–11 `ng` (x, y, z). Lanes past the last triangle
-/// are zeros and never tested.
+/// Eight triangles (in [`super::Accel`]'s blocks, BVH-order indices `8k .. 8k + 8` of block
+/// `k`; a small scene's walk keeps each lane's index beside its blocks), each coordinate a row
+/// of 8 lanes: rows 0–2 `v0`, 3–5 `e1`, 6–8 `e2`, 9–11 `ng` (x, y, z). Lanes past the last
+/// triangle are zeros and never tested.
 #[derive(Clone, Copy, Debug, Default)]
 #[repr(C, align(32))]
 pub(super) struct TriBlock {
