@@ -28,6 +28,9 @@ use super::triangles::{block_any_avx2, block_closest_avx2};
 use glam::{Vec2, Vec3A};
 use obvhs::ray::Ray;
 
+#[cfg(test)]
+pub(super) mod tests;
+
 /// Most blocks of 8 triangles a scene may have for its rays to skip the tree (128 triangles):
 /// a walk pays its stack, its node tests (1.6 a ray on Mitsuba's box) and a branch per hit
 /// child. Measured first with every block tested and no boxes (1 thread, 128², 16 spp, three
