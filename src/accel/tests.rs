@@ -250,7 +250,11 @@ fn refill(p: &mut RayPacket, rng: &mut SmallRng, scene: &[[Vec3; 3]], i: usize) 
             d.x = if lane % 2 == 0 { 0.0 } else { -0.0 };
             d = d.normalize_or(Vec3::Y);
         }
-        let tmax = if lane.is_multiple_of(3) { 2.0 } else { f32::INFINITY };
+        let tmax = if lane.is_multiple_of(3) {
+            2.0
+        } else {
+            f32::INFINITY
+        };
         if rng.random::<f32>() < 0.8 {
             p.set(lane, o, d, tmax);
         }
