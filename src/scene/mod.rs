@@ -60,8 +60,9 @@ pub struct TriShading {
     /// Texture coordinates of the vertices (zero where the file has none).
     pub uvs: [Vec2; 3],
     pub material: u32,
-    /// Whether the three vertex normals are `ng` (the file gives none, or gives the geometric
-    /// one): the shading normal is then `ng` itself, not interpolated and normalised again.
+    /// Whether the three vertex normals are `ng`, bit for bit (the file gives none, or gives
+    /// the geometric one): the shading normal is then `ng` itself, not interpolated and
+    /// normalised again.
     pub flat: bool,
 }
 
@@ -454,7 +455,11 @@ fn shading_in_bvh_order(accel: &Accel, mesh: &Mesh) -> Vec<TriShading> {
                 ng,
                 uvs: t.uvs.unwrap_or([Vec2::ZERO; 3]),
                 material: t.material,
-                flat: normals == [ng; 3],
+                // bit for bit: a file's normal of −0 where ng has +0 would turn the
+                // shading frame (`Frame::from_normal` takes the sign of z)
+                flat: normals
+                    .iter()
+                    .all(|n| n.to_array().map(f32::to_bits) == ng.to_array().map(f32::to_bits)),
             }
         })
         .collect()
