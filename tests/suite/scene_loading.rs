@@ -76,48 +76,61 @@ fn obj_with_mtl_loads_triangles_materials_and_emitters() {
     assert!(floor.iter().all(|t| t.normals[0] == Vec3::Y));
 }
 
-/// A triangle whose vertex normals are its geometric normal (none in the file, or the file's
-/// equal to it) is flat: a hit's shading normal is the geometric one, bit for bit; a triangle
-/// with other vertex normals interpolates them and normalises the sum.
+/// A triangle whose vertex normals are its geometric normal, bit for bit (none in the file, or
+/// the file's equal to it) is flat: a hit's shading normal is the geometric one, bit for bit;
+/// a triangle with other vertex normals interpolates them and normalises the sum — also one
+/// whose normal differs from `ng` only in the sign of a zero, which turns the shading frame.
 #[test]
 fn flat_triangles_shade_with_their_own_normal() {
     let dir = tempfile::tempdir().unwrap();
     write(dir.path(), "test.mtl", MTL);
     // a flat quad without normals on the tilted plane z = 0.37x + 0.11y (its normal interpolated
     // and normalised again would come back an ulp or so off), beside it a smooth triangle at
-    // z = 0 whose vertex normals lean, and a triangle at z = 0 given its own normal (0, 0, 1)
+    // z = 0 whose vertex normals lean, a triangle at z = 0 given its own normal (0, 0, 1), and
+    // one given (−0, 0, 1)
     let obj = write(
         dir.path(),
         "flat.obj",
         "mtllib test.mtl\nusemtl white\n\
          v 0 0 0\nv 1 0 0.37\nv 1 1 0.48\nv 0 1 0.11\nv 2 0 0\nv 3 0 0\nv 2 1 0\n\
-         v 4 0 0\nv 5 0 0\nv 4 1 0\n\
-         vn 0.6 0 1\nvn -0.4 0.8 1\nvn 0 -1 1\nvn 0 0 1\n\
-         f 1 2 3 4\nf 5//1 6//2 7//3\nf 8//4 9//4 10//4\n",
+         v 4 0 0\nv 5 0 0\nv 4 1 0\nv 6 0 0\nv 7 0 0\nv 6 1 0\n\
+         vn 0.6 0 1\nvn -0.4 0.8 1\nvn 0 -1 1\nvn 0 0 1\nvn -0 0 1\n\
+         f 1 2 3 4\nf 5//1 6//2 7//3\nf 8//4 9//4 10//4\nf 11//5 12//5 13//5\n",
     );
     let s = scene::load(&obj).unwrap();
     let mut stack = vrpt::accel::TraceStack::default();
-    // a point in each of the quad's halves, the smooth triangle and the one with its normal
+    // a point in each of the quad's halves, the smooth triangle, the one with its normal and the
+    // one with a −0
     for (x, y, flat) in [
         (0.6f32, 0.3, true),
         (0.2, 0.6, true),
         (2.2, 0.3, false),
         (4.2, 0.3, true),
+        (6.2, 0.3, false),
     ] {
         for (z, dir) in [(1.0f32, -Vec3::Z), (-1.0, Vec3::Z)] {
             let o = Vec3::new(x, y, z);
             let hit = s.intersect(&mut stack, o, dir, f32::INFINITY).unwrap();
             assert_eq!(s.shading[hit.prim as usize].flat, flat, "x = {x}");
             let p = s.surface(&hit);
+            let bits = |v: Vec3| v.to_array().map(f32::to_bits);
             if flat {
-                assert_eq!(p.ns, p.ng, "x = {x}: a flat triangle's shading normal");
-            } else {
-                let sh = &s.shading[hit.prim as usize];
-                let b0 = 1.0 - hit.b1 - hit.b2;
-                let n = (sh.normals[0] * b0 + sh.normals[1] * hit.b1 + sh.normals[2] * hit.b2)
-                    .normalize();
-                assert_eq!(p.ns, n, "the smooth triangle's interpolated normal");
+                assert_eq!(
+                    bits(p.ns),
+                    bits(p.ng),
+                    "x = {x}: a flat triangle's shading normal"
+                );
+                continue;
+            }
+            let sh = &s.shading[hit.prim as usize];
+            let b0 = 1.0 - hit.b1 - hit.b2;
+            let n =
+                (sh.normals[0] * b0 + sh.normals[1] * hit.b1 + sh.normals[2] * hit.b2).normalize();
+            assert_eq!(bits(p.ns), bits(n), "x = {x}: the interpolated normal");
+            if x < 6.0 {
                 assert!(p.ns.dot(p.ng) < 0.99, "its vertex normals lean: {}", p.ns);
+            } else {
+                assert!(p.ns.x.is_sign_negative() && !p.ng.x.is_sign_negative());
             }
         }
     }
