@@ -17,6 +17,35 @@ pub(super) fn random_triangles(seed: u64, n: usize, size: f32) -> Vec<[Vec3; 3]>
         .collect()
 }
 
+/// The filters the walks' tests run with: every hit kept, and some refused (as a cutout's
+/// opacity map refuses them).
+pub(super) const KEEPS: [fn(u32, Vec2) -> bool; 2] =
+    [|_, _| true, |prim, b| !prim.is_multiple_of(3) && b.x < 0.8];
+
+/// The tree's AVX2 closest hit and any-hit answer for the ray `(o, d, tmax)` under `keep`
+/// (the caller has checked the CPU has AVX2).
+#[cfg(target_arch = "x86_64")]
+pub(super) fn tree_avx2(
+    accel: &Accel,
+    stack: &mut TraceStack,
+    (o, d, tmax): (Vec3, Vec3, f32),
+    keep: fn(u32, Vec2) -> bool,
+) -> (Option<Hit>, bool) {
+    // SAFETY: the caller checked that the CPU has AVX2
+    #[allow(unsafe_code)]
+    unsafe {
+        (
+            accel.closest_avx2(&mut stack.0, o, d, tmax, keep),
+            accel.any_avx2(&mut stack.0, o, d, tmax, keep),
+        )
+    }
+}
+
+/// A hit as the bits a bit-for-bit comparison compares.
+pub(super) fn hit_bits(h: Option<Hit>) -> Option<(u32, u32, u32, u32)> {
+    h.map(|h| (h.prim, h.t.to_bits(), h.b1.to_bits(), h.b2.to_bits()))
+}
+
 /// The AVX2 node test gives obvhs's mask, bit for bit, on every node of a BVH over random
 /// triangles, for rays of every octant (signed zeros included) and short and long `tmax`:
 /// the claim that makes images bit-identical whichever test the CPU runs.
@@ -94,22 +123,11 @@ fn the_avx2_triangle_test_gives_the_scalar_hits() {
         };
         let d = (target - o).normalize_or(Vec3::X);
         let tmax = if i % 4 == 0 { 3.0 } else { f32::INFINITY };
-        let keep_all = |_: u32, _: Vec2| true;
-        let keep_some = |prim: u32, b: Vec2| !prim.is_multiple_of(3) && b.x < 0.8;
-        for keep in [&keep_all as &dyn Fn(u32, Vec2) -> bool, &keep_some] {
-            // SAFETY: the CPU has AVX2 (checked above)
-            #[allow(unsafe_code)]
-            let (wide, wide_any) = unsafe {
-                (
-                    accel.closest_avx2(&mut stack.0, o, d, tmax, keep),
-                    accel.any_avx2(&mut stack.0, o, d, tmax, keep),
-                )
-            };
+        for keep in KEEPS {
+            let (wide, wide_any) = tree_avx2(&accel, &mut stack, (o, d, tmax), keep);
             let scalar = accel.closest_sse(&mut stack.0, o, d, tmax, keep);
             let scalar_any = accel.any_sse(&mut stack.0, o, d, tmax, keep);
-            let bits =
-                |h: Option<Hit>| h.map(|h| (h.prim, h.t.to_bits(), h.b1.to_bits(), h.b2.to_bits()));
-            assert_eq!(bits(wide), bits(scalar), "ray {i}");
+            assert_eq!(hit_bits(wide), hit_bits(scalar), "ray {i}");
             assert_eq!(wide_any, scalar_any, "ray {i}");
             hits += wide.is_some() as u32;
             blocked += wide_any as u32;
@@ -305,20 +323,22 @@ fn packets_give_each_rays_hit() {
             accel.intersect_packet(&mut stack, &p, &mut got);
             let blocking = accel.occluded_packet(&mut stack, &p);
             assert_eq!(blocking & !p.live(), 0, "packet {i}: a dead lane blocked");
-            let bits =
-                |h: Option<Hit>| h.map(|h| (h.prim, h.t.to_bits(), h.b1.to_bits(), h.b2.to_bits()));
             for lane in p.lanes() {
                 let (o, d, tmax) = p.ray(lane);
                 let want = accel.intersect_with(&mut stack, o, d, tmax);
                 assert_eq!(
-                    bits(got[lane]),
-                    bits(want),
+                    hit_bits(got[lane]),
+                    hit_bits(want),
                     "packet {i}, lane {lane}, {walk}"
                 );
                 if accel.small.is_some() {
                     // the walk itself against every triangle tested in index order
                     let brute = accel.intersect_brute_force(o, d, tmax);
-                    assert_eq!(bits(want), bits(brute), "packet {i}, lane {lane}, {walk}");
+                    assert_eq!(
+                        hit_bits(want),
+                        hit_bits(brute),
+                        "packet {i}, lane {lane}, {walk}"
+                    );
                 }
                 let occluded = accel.occluded_with(&mut stack, o, d, tmax);
                 assert_eq!(

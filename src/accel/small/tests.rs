@@ -1,7 +1,7 @@
 //! The small scenes' walks (`small.rs`) against the tree's and every triangle's hits, bit for
 //! bit, for every kind of walk; the regrouping's partition and a room's blocks.
 
-use super::super::tests::random_triangles;
+use super::super::tests::{hit_bits, random_triangles, tree_avx2, KEEPS};
 use super::super::*;
 use super::{groups, SmallScene, SMALL_BLOCKS};
 use rand::{rngs::SmallRng, Rng, SeedableRng};
@@ -72,17 +72,8 @@ fn a_small_scene_finds_the_trees_hit() {
         let target = t[0] + (t[1] - t[0]) * rng.random::<f32>() * 0.5 + (t[2] - t[0]) * 0.4;
         let d = (target - o).normalize_or(Vec3::X);
         let tmax = if i % 4 == 0 { 2.0 } else { f32::INFINITY };
-        let keep_all = |_: u32, _: Vec2| true;
-        let keep_some = |prim: u32, b: Vec2| !prim.is_multiple_of(3) && b.x < 0.8;
-        for keep in [&keep_all as &dyn Fn(u32, Vec2) -> bool, &keep_some] {
-            // SAFETY: the CPU has AVX2 (checked above)
-            #[allow(unsafe_code)]
-            let (tree, tree_any) = unsafe {
-                (
-                    accel.closest_avx2(&mut stack.0, o, d, tmax, keep),
-                    accel.any_avx2(&mut stack.0, o, d, tmax, keep),
-                )
-            };
+        for keep in KEEPS {
+            let (tree, tree_any) = tree_avx2(&accel, &mut stack, (o, d, tmax), keep);
             for (walk, boxes) in &walks {
                 // SAFETY: the CPU has AVX2 (checked above)
                 #[allow(unsafe_code)]
@@ -96,10 +87,7 @@ fn a_small_scene_finds_the_trees_hit() {
                     near += 1;
                     continue;
                 }
-                let bits = |h: Option<Hit>| {
-                    h.map(|h| (h.prim, h.t.to_bits(), h.b1.to_bits(), h.b2.to_bits()))
-                };
-                assert_eq!(bits(small), bits(tree), "ray {i}, {walk}");
+                assert_eq!(hit_bits(small), hit_bits(tree), "ray {i}, {walk}");
                 assert_eq!(small_any, tree_any, "ray {i}, {walk}");
                 hits += small.is_some() as u32;
             }
