@@ -14,19 +14,32 @@
 //! a cosine-weighted direction (`β ← β·ρ`); emission counts only where a camera ray meets it
 //! (front side). A path has at most `max_depth` vertices, as the renderer's.
 //!
-//! `cargo run --release --example lean_paths -- SCENE [SPP] [ROUNDS]` (a scene of diffuse
-//! materials, without textures or vertex normals, lit by one emitter — a triangle, or a quad the
-//! renderer samples as one rectangle — and a black environment; its camera, size and depth: on
-//! these the two choose the same points on the light). On Mitsuba's box
-//! (`tools/peers/mitsuba_race.py` writes it), 256², 64 spp, 2026-11-30: the loop 3.03–3.10 M
-//! samples/s, the renderer 1.72–1.76 ([performance](../docs/performance.md)).
+//! With `default` as the fourth argument the loop is the renderer's default estimator instead
+//! (stratified points, Phong directions, light samples under MIS with the render's light choice
+//! and points; [`lean_default`]) over the same tables, against the renderer's default without
+//! edge rays: what that estimator costs a sample when its loop is as lean (Mitsuba's box, 256²,
+//! 32 spp, 2026-11-30: the loop 1.74–1.89 M samples/s, the renderer 1.42–1.44, 1.23–1.33× the
+//! loop's time, image means equal to 10⁻⁷).
+//!
+//! `cargo run --release --example lean_paths -- SCENE [SPP] [ROUNDS] [mitsuba|default]` (a scene of
+//! diffuse materials, without textures or vertex normals, lit by one emitter — a triangle, or a
+//! quad the renderer samples as one rectangle — and a black environment; its camera, size and
+//! depth: on these the two choose the same points on the light; `default` takes Phong materials
+//! too, any lights). On Mitsuba's box (`tools/peers/mitsuba_race.py` writes it), 256², 64 spp,
+//! 2026-11-30: the loop 3.03–3.10 M samples/s, the renderer 1.72–1.76
+//! ([performance](../docs/performance.md)).
 
-use glam::{UVec2, Vec2, Vec3};
+use glam::{DVec3, UVec2, Vec2, Vec3};
 use std::f32::consts::{FRAC_1_PI, TAU};
 use std::time::Instant;
 use vrpt::accel::TraceStack;
+use vrpt::bsdf::{Bsdf, Directions};
 use vrpt::camera::Camera;
+use vrpt::integrator::mis_weight;
+use vrpt::math::Frame;
 use vrpt::render::{render, NoProgress, RenderSettings};
+use vrpt::sampler::layout::{BounceSample, CameraSample, LightValues};
+use vrpt::sampler::{Sampler, StratifiedSampler};
 use vrpt::scene::Scene;
 use vrpt::strategy::Strategy;
 
@@ -36,16 +49,22 @@ struct Tables {
     ng: Vec<Vec3>,
     kd: Vec<Vec3>,
     ke: Vec<Vec3>,
+    /// The BSDF of each triangle's material (the default estimator's loop).
+    bsdf: Vec<Bsdf>,
     /// The emissive triangles, their radiance and the running sum of their areas.
     lights: Vec<([Vec3; 3], Vec3, f32)>,
 }
 
 impl Tables {
-    fn of(scene: &Scene) -> Result<Tables, String> {
+    /// The tables of `scene`, whose materials must be plain (no maps, mirrors or glass) and
+    /// its triangles flat; for Mitsuba's estimator also diffuse (`diffuse`), lit by one emitter
+    /// and a black environment.
+    fn of(scene: &Scene, diffuse: bool) -> Result<Tables, String> {
         let mut t = Tables {
             ng: vec![],
             kd: vec![],
             ke: vec![],
+            bsdf: vec![],
             lights: vec![],
         };
         let mut area = 0.0;
@@ -53,7 +72,7 @@ impl Tables {
             let v = scene.accel.vertices(prim);
             let m = &scene.materials[scene.shading[prim as usize].material as usize];
             let maps = m.maps.colour() || m.maps.perturbs_normal() || m.maps.opacity.is_some();
-            if m.ks() != Vec3::ZERO || m.specular.is_some() || maps {
+            if (diffuse && m.ks() != Vec3::ZERO) || m.specular.is_some() || maps {
                 return Err(format!("material {} is not plain diffuse", m.name));
             }
             let s = &scene.shading[prim as usize];
@@ -64,10 +83,14 @@ impl Tables {
             t.ng.push(c.normalize_or_zero());
             t.kd.push(m.kd());
             t.ke.push(m.emission);
+            t.bsdf.push(m.bsdf());
             if m.emission.max_element() > 0.0 {
                 area += 0.5 * c.length();
                 t.lights.push((v, m.emission, area));
             }
+        }
+        if !diffuse {
+            return Ok(t);
         }
         if t.lights.is_empty() || scene.lights.emitters.len() != 1 {
             return Err("the loop needs one emitter (a triangle or a quad)".into());
@@ -168,6 +191,111 @@ fn lean(scene: &Scene, t: &Tables, (w, h, spp, depth): (u32, u32, u32, u32)) -> 
     film
 }
 
+/// The renderer's default estimator without edge rays, as one loop over the tables: stratified
+/// points (one pass of `spp` a pixel, the renderer's layout of dimensions), Phong directions,
+/// light samples by the render's chooser and points under MIS (power heuristic) with the
+/// emission BSDF-sampled rays reach, Russian roulette from the third bounce. The sums of
+/// radiance and of its square a pixel (in f64, as the film's).
+fn lean_default(scene: &Scene, t: &Tables, settings: &RenderSettings) -> Vec<(DVec3, DVec3)> {
+    let (w, h, spp, depth) = (
+        settings.width,
+        settings.height,
+        settings.spp,
+        settings.max_depth,
+    );
+    let Some(camera) = Camera::new(&scene.camera, w, h) else {
+        return vec![];
+    };
+    let s = settings.strategy;
+    let lights = scene.lights.sampler(s.light_points, s.light_choice);
+    let values = LightValues::of(lights.any(), lights.chooses());
+    let eps = scene.ray_epsilon;
+    let mut sampler = StratifiedSampler::new(settings.seed, spp);
+    let mut stack = TraceStack::default();
+    let mut film = vec![(DVec3::ZERO, DVec3::ZERO); w as usize * h as usize];
+    for (pixel, (sum, sum_sq)) in film.iter_mut().enumerate() {
+        let at = UVec2::new(pixel as u32 % w, pixel as u32 / w);
+        for index in 0..spp {
+            sampler.start_pixel_sample(at, index);
+            let u = CameraSample::draw(&mut sampler).pixel;
+            let (mut o, mut d) = camera.generate_ray(at, u);
+            let (mut beta, mut l) = (Vec3::ONE, Vec3::ZERO);
+            // the vertex the ray left (point, normal, BSDF pdf of the direction)
+            let mut prev: Option<(Vec3, Vec3, f32)> = None;
+            for segment in 1..=depth {
+                let Some(hit) = scene.accel.intersect_with(&mut stack, o, d, f32::INFINITY) else {
+                    let le = scene.environment().radiance(d);
+                    let w = prev.map_or(1.0, |(_, n, pdf)| {
+                        mis_weight(pdf, lights.environment_pdf(n, d))
+                    });
+                    l += beta * le * w;
+                    break;
+                };
+                let prim = hit.prim as usize;
+                let (ng, ke) = (t.ng[prim], t.ke[prim]);
+                let p = o + d * hit.t;
+                let front = ng.dot(d) < 0.0;
+                if front && ke != Vec3::ZERO {
+                    let w = prev.map_or(1.0, |(q, n, pdf)| {
+                        let i = scene.lights.light_of(hit.prim);
+                        mis_weight(pdf, i.map_or(0.0, |i| lights.pdf(i, q, n, p)))
+                    });
+                    l += beta * ke * w;
+                }
+                let bsdf = &t.bsdf[prim];
+                if segment == depth || bsdf.is_black() {
+                    break;
+                }
+                let n = if front { ng } else { -ng };
+                let frame = Frame::from_normal(n);
+                let wo = frame.to_local(-d);
+                let lobe = bsdf.chooses_lobe(Directions::Phong);
+                let u = BounceSample::draw_needed(&mut sampler, values, lobe, segment >= 3, false);
+                let spawn = p + n * eps;
+                if let Some(ls) = lights.sample(p, n, u.light, u.light_point) {
+                    let wi = frame.to_local(ls.wi);
+                    let f = bsdf.eval(wo, wi);
+                    if ls.wi.dot(n) > 0.0 && wi.z > 0.0 && f.max_element() > 0.0 {
+                        let (to, tmax) = if ls.dist.is_finite() {
+                            let y = p + ls.wi * ls.dist - spawn;
+                            let len = y.length();
+                            (y / len, len - 2.0 * eps)
+                        } else {
+                            (ls.wi, f32::INFINITY)
+                        };
+                        if tmax > 0.0 && !scene.accel.occluded_with(&mut stack, spawn, to, tmax) {
+                            let pb = bsdf.pdf(wo, wi, Directions::Phong);
+                            let w = mis_weight(ls.pdf, pb);
+                            l += beta * f * ls.le * (wi.z * w / ls.pdf);
+                        }
+                    }
+                }
+                let Some(bs) = bsdf.sample(wo, u.lobe, u.direction, Directions::Phong) else {
+                    break;
+                };
+                let wi = frame.to_world(bs.wi);
+                if wi.dot(n) <= 0.0 {
+                    break;
+                }
+                beta *= bs.f * (bs.wi.z / bs.pdf);
+                if segment >= 3 {
+                    let q = beta.max_element().min(0.95);
+                    if u.roulette >= q {
+                        break;
+                    }
+                    beta /= q;
+                }
+                prev = Some((p, n, bs.pdf));
+                (o, d) = (spawn, wi);
+            }
+            let l = l.as_dvec3();
+            *sum += l;
+            *sum_sq += l * l;
+        }
+    }
+    film
+}
+
 fn mean(image: &[Vec3], scale: f32) -> Vec3 {
     image.iter().fold(Vec3::ZERO, |a, &b| a + b) / (image.len() as f32 * scale)
 }
@@ -175,7 +303,7 @@ fn mean(image: &[Vec3], scale: f32) -> Vec3 {
 fn main() -> Result<(), String> {
     let args: Vec<String> = std::env::args().collect();
     let Some(path) = args.get(1) else {
-        return Err("usage: lean_paths SCENE [SPP] [ROUNDS]".into());
+        return Err("usage: lean_paths SCENE [SPP] [ROUNDS] [mitsuba|default]".into());
     };
     let number = |i: usize, default: u32| {
         args.get(i).map_or(Ok(default), |s| {
@@ -186,13 +314,20 @@ fn main() -> Result<(), String> {
         })
     };
     let (spp, rounds) = (number(2, 64)?, number(3, 3)?);
+    let default = match args.get(4).map(String::as_str) {
+        None | Some("mitsuba") => false,
+        Some("default") => true,
+        Some(other) => return Err(format!("{other}: the estimator is mitsuba or default")),
+    };
     let scene = vrpt::scene::load(std::path::Path::new(path)).map_err(|e| e.to_string())?;
-    let tables = Tables::of(&scene)?;
+    let tables = Tables::of(&scene, !default)?;
     let mut settings = RenderSettings::for_scene(&scene);
     settings.spp = spp;
     settings.threads = Some(1);
     settings.edge_rays = 0;
-    settings.strategy = Strategy::parse("independent+cosine+nee+area+tree")?;
+    if !default {
+        settings.strategy = Strategy::parse("independent+cosine+nee+area+tree")?;
+    }
     let (w, h, depth) = (settings.width, settings.height, settings.max_depth);
     let samples = w as f64 * h as f64 * spp as f64;
     if Camera::new(&scene.camera, w, h).is_none() {
@@ -200,7 +335,12 @@ fn main() -> Result<(), String> {
     }
     for round in 1..=rounds {
         let start = Instant::now();
-        let image = lean(&scene, &tables, (w, h, spp, depth));
+        let image = if default {
+            let sums = lean_default(&scene, &tables, &settings);
+            sums.iter().map(|s| s.0.as_vec3()).collect()
+        } else {
+            lean(&scene, &tables, (w, h, spp, depth))
+        };
         let lean_rate = samples / start.elapsed().as_secs_f64() / 1e6;
         let (film, stats) = render(&scene, &settings, &NoProgress).map_err(|e| e.to_string())?;
         let vrpt_rate = stats.samples as f64 / stats.elapsed.as_secs_f64() / 1e6;
