@@ -18,15 +18,19 @@
 //! (stratified points, Phong directions, light samples under MIS with the render's light choice
 //! and points; [`lean_default`]) over the same tables, against the renderer's default without
 //! edge rays: what that estimator costs a sample when its loop is as lean (Mitsuba's box, 256²,
-//! 32 spp, 2026-11-30: the loop 1.74–1.89 M samples/s, the renderer 1.42–1.44, 1.23–1.33× the
-//! loop's time, image means equal to 10⁻⁷).
+//! 32 spp, 2026-11-30: the renderer took 1.23–1.33× the loop's time in one build of the example,
+//! 1.15–1.17× in the next; image means equal to 10⁻⁷). With `integrator` the same loop over the
+//! pixels calls the library's path loop ([`radiance`]) for each sample: the renderer took
+//! 1.11–1.18× its time, the image mean the same to every printed digit — so most of that gap
+//! lies outside the path loop, in the renderer's pixel, tile and pass machinery
+//! (docs/performance.md, ninth session).
 //!
-//! `cargo run --release --example lean_paths -- SCENE [SPP] [ROUNDS] [mitsuba|default]` (a scene of
-//! diffuse materials, without textures or vertex normals, lit by one emitter — a triangle, or a
-//! quad the renderer samples as one rectangle — and a black environment; its camera, size and
-//! depth: on these the two choose the same points on the light; `default` takes Phong materials
-//! too, any lights). On Mitsuba's box (`tools/peers/mitsuba_race.py` writes it), 256², 64 spp,
-//! 2026-11-30: the loop 3.03–3.10 M samples/s, the renderer 1.72–1.76
+//! `cargo run --release --example lean_paths -- SCENE [SPP] [ROUNDS] [mitsuba|default|integrator]`
+//! (a scene of diffuse materials, without textures or vertex normals, lit by one emitter — a
+//! triangle, or a quad the renderer samples as one rectangle — and a black environment; its camera,
+//! size and depth: on these the two choose the same points on the light; `default` takes Phong
+//! materials too, any lights). On Mitsuba's box (`tools/peers/mitsuba_race.py` writes it), 256², 64
+//! spp, 2026-11-30: the loop 3.03–3.10 M samples/s, the renderer 1.72–1.76
 //! ([performance](../docs/performance.md)).
 
 use glam::{DVec3, UVec2, Vec2, Vec3};
@@ -35,7 +39,7 @@ use std::time::Instant;
 use vrpt::accel::TraceStack;
 use vrpt::bsdf::{Bsdf, Directions};
 use vrpt::camera::Camera;
-use vrpt::integrator::mis_weight;
+use vrpt::integrator::{mis_weight, radiance, IntegratorSettings, RayCounts};
 use vrpt::math::Frame;
 use vrpt::render::{render, NoProgress, RenderSettings};
 use vrpt::sampler::layout::{BounceSample, CameraSample, LightValues};
@@ -196,7 +200,16 @@ fn lean(scene: &Scene, t: &Tables, (w, h, spp, depth): (u32, u32, u32, u32)) -> 
 /// light samples by the render's chooser and points under MIS (power heuristic) with the
 /// emission BSDF-sampled rays reach, Russian roulette from the third bounce. The sums of
 /// radiance and of its square a pixel (in f64, as the film's).
-fn lean_default(scene: &Scene, t: &Tables, settings: &RenderSettings) -> Vec<(DVec3, DVec3)> {
+///
+/// With `library`, each sample's radiance is the library's [`radiance`] instead (the renderer's
+/// path loop, called from this loop over the pixels: what the renderer's pixel, tile and pass
+/// machinery costs beside it).
+fn lean_default(
+    scene: &Scene,
+    t: &Tables,
+    settings: &RenderSettings,
+    library: bool,
+) -> Vec<(DVec3, DVec3)> {
     let (w, h, spp, depth) = (
         settings.width,
         settings.height,
@@ -212,6 +225,16 @@ fn lean_default(scene: &Scene, t: &Tables, settings: &RenderSettings) -> Vec<(DV
     let eps = scene.ray_epsilon;
     let mut sampler = StratifiedSampler::new(settings.seed, spp);
     let mut stack = TraceStack::default();
+    let integrator = IntegratorSettings {
+        max_depth: depth,
+        directions: s.directions,
+        lights: s.lights,
+        light_points: s.light_points,
+        light_choice: s.light_choice,
+        time_traces: false,
+        camera_emission: true,
+    };
+    let mut rays = RayCounts::default();
     let mut film = vec![(DVec3::ZERO, DVec3::ZERO); w as usize * h as usize];
     for (pixel, (sum, sum_sq)) in film.iter_mut().enumerate() {
         let at = UVec2::new(pixel as u32 % w, pixel as u32 / w);
@@ -219,6 +242,19 @@ fn lean_default(scene: &Scene, t: &Tables, settings: &RenderSettings) -> Vec<(DV
             sampler.start_pixel_sample(at, index);
             let u = CameraSample::draw(&mut sampler).pixel;
             let (mut o, mut d) = camera.generate_ray(at, u);
+            if library {
+                let l = radiance(
+                    scene,
+                    (o, d),
+                    &mut sampler,
+                    &integrator,
+                    &mut rays,
+                    &mut stack,
+                );
+                let l = l.as_dvec3();
+                (*sum, *sum_sq) = (*sum + l, *sum_sq + l * l);
+                continue;
+            }
             let (mut beta, mut l) = (Vec3::ONE, Vec3::ZERO);
             // the vertex the ray left (point, normal, BSDF pdf of the direction)
             let mut prev: Option<(Vec3, Vec3, f32)> = None;
@@ -303,7 +339,7 @@ fn mean(image: &[Vec3], scale: f32) -> Vec3 {
 fn main() -> Result<(), String> {
     let args: Vec<String> = std::env::args().collect();
     let Some(path) = args.get(1) else {
-        return Err("usage: lean_paths SCENE [SPP] [ROUNDS] [mitsuba|default]".into());
+        return Err("usage: lean_paths SCENE [SPP] [ROUNDS] [mitsuba|default|integrator]".into());
     };
     let number = |i: usize, default: u32| {
         args.get(i).map_or(Ok(default), |s| {
@@ -314,10 +350,15 @@ fn main() -> Result<(), String> {
         })
     };
     let (spp, rounds) = (number(2, 64)?, number(3, 3)?);
-    let default = match args.get(4).map(String::as_str) {
-        None | Some("mitsuba") => false,
-        Some("default") => true,
-        Some(other) => return Err(format!("{other}: the estimator is mitsuba or default")),
+    let (default, library) = match args.get(4).map(String::as_str) {
+        None | Some("mitsuba") => (false, false),
+        Some("default") => (true, false),
+        Some("integrator") => (true, true),
+        Some(other) => {
+            return Err(format!(
+                "{other}: the loop is mitsuba, default or integrator"
+            ))
+        }
     };
     let scene = vrpt::scene::load(std::path::Path::new(path)).map_err(|e| e.to_string())?;
     let tables = Tables::of(&scene, !default)?;
@@ -336,7 +377,7 @@ fn main() -> Result<(), String> {
     for round in 1..=rounds {
         let start = Instant::now();
         let image = if default {
-            let sums = lean_default(&scene, &tables, &settings);
+            let sums = lean_default(&scene, &tables, &settings, library);
             sums.iter().map(|s| s.0.as_vec3()).collect()
         } else {
             lean(&scene, &tables, (w, h, spp, depth))
