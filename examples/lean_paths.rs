@@ -16,14 +16,15 @@
 //!
 //! With `default` as the fourth argument the loop is the renderer's default estimator instead
 //! (stratified points, Phong directions, light samples under MIS with the render's light choice
-//! and points; [`lean_default`]) over the same tables, against the renderer's default without
-//! edge rays: what that estimator costs a sample when its loop is as lean (Mitsuba's box, 256²,
-//! 32 spp, 2026-11-30: the renderer took 1.23–1.33× the loop's time in one build of the example,
-//! 1.15–1.17× in the next; image means equal to 10⁻⁷). With `integrator` the same loop over the
-//! pixels calls the library's path loop ([`radiance`]) for each sample: the renderer took
-//! 1.11–1.18× its time, the image mean the same to every printed digit — so most of that gap
-//! lies outside the path loop, in the renderer's pixel, tile and pass machinery
-//! (docs/performance.md, ninth session).
+//! and points; [`lean_default`]) over the same tables, built from the library's sampler, light
+//! sampler and BSDF: what that estimator costs a sample when its loop is as lean. With
+//! `integrator` the same loop over the pixels calls the library's path loop ([`radiance`]) for
+//! each sample. On Mitsuba's box, 256², 32 spp, 1 thread, 2026-11-30, four rounds in turn:
+//! `default` 1.62–1.70 M samples/s, `integrator` 1.50–1.63, `vrpt render --edge-rays 0 --threads
+//! 1` 1.50–1.53; image means equal to 10⁻⁷ (`default`) and to every printed digit
+//! (`integrator`). Read the renderer's rate from the CLI: this example's own call of `render`
+//! ran at 1.31–1.44 there (the renderer compiled into the example is slower than the binary; with
+//! Mitsuba's estimator 1.75–1.78 against the CLI's 1.78–1.83).
 //!
 //! `cargo run --release --example lean_paths -- SCENE [SPP] [ROUNDS] [mitsuba|default|integrator]`
 //! (a scene of diffuse materials, without textures or vertex normals, lit by one emitter — a
