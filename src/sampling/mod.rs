@@ -29,11 +29,12 @@
 //! [`sample_bilinear`]/[`bilinear_pdf`] warp `u` by a bilinear function of four corner weights
 //! (pbrt-v4's approximation of the receiver's cosine over the domain, "projected solid angle").
 
+use crate::math::sin_cos_quarter;
 use glam::{Vec2, Vec3};
 
 mod spherical;
 pub use spherical::{SphericalRectangle, SphericalTriangle};
-use std::f32::consts::{FRAC_1_PI, FRAC_PI_2, FRAC_PI_4, PI};
+use std::f32::consts::{FRAC_1_PI, FRAC_PI_4, PI};
 
 const INV_2PI: f32 = 0.5 * FRAC_1_PI;
 
@@ -45,13 +46,15 @@ pub fn sample_concentric_disk(u: Vec2) -> Vec2 {
     if o.x == 0.0 && o.y == 0.0 {
         return Vec2::ZERO;
     }
-    let (r, theta) = if o.x.abs() > o.y.abs() {
-        (o.x, FRAC_PI_4 * (o.y / o.x))
+    // the angle θ = φ in the wedges about ±x, θ = π/2 − φ in those about ±y, |φ| ≤ π/4:
+    // there cos θ = sin φ and sin θ = cos φ
+    if o.x.abs() > o.y.abs() {
+        let (s, c) = sin_cos_quarter(FRAC_PI_4 * (o.y / o.x));
+        Vec2::new(o.x * c, o.x * s)
     } else {
-        (o.y, FRAC_PI_2 - FRAC_PI_4 * (o.x / o.y))
-    };
-    let (s, c) = theta.sin_cos();
-    Vec2::new(r * c, r * s)
+        let (s, c) = sin_cos_quarter(FRAC_PI_4 * (o.x / o.y));
+        Vec2::new(o.y * s, o.y * c)
+    }
 }
 
 /// Uniform direction on the upper hemisphere (z ≥ 0): `z = u₀`, `φ = 2π u₁`.
