@@ -42,18 +42,26 @@ const INV_2PI: f32 = 0.5 * FRAC_1_PI;
 /// of the square stay compact on the disk).
 #[inline]
 pub fn sample_concentric_disk(u: Vec2) -> Vec2 {
+    concentric(u).0
+}
+
+/// [`sample_concentric_disk`]'s point and its radius, the larger of `|2u − 1|`'s coordinates:
+/// the radius is known before the angle's division and polynomial, so what depends on it alone
+/// (the height of a cosine-weighted direction) does not wait on them.
+#[inline(always)]
+fn concentric(u: Vec2) -> (Vec2, f32) {
     let o = 2.0 * u - Vec2::ONE;
     if o.x == 0.0 && o.y == 0.0 {
-        return Vec2::ZERO;
+        return (Vec2::ZERO, 0.0);
     }
     // the angle θ = φ in the wedges about ±x, θ = π/2 − φ in those about ±y, |φ| ≤ π/4:
     // there cos θ = sin φ and sin θ = cos φ
     if o.x.abs() > o.y.abs() {
         let (s, c) = sin_cos_quarter(FRAC_PI_4 * (o.y / o.x));
-        Vec2::new(o.x * c, o.x * s)
+        (Vec2::new(o.x * c, o.x * s), o.x.abs())
     } else {
         let (s, c) = sin_cos_quarter(FRAC_PI_4 * (o.x / o.y));
-        Vec2::new(o.y * s, o.y * c)
+        (Vec2::new(o.y * s, o.y * c), o.y.abs())
     }
 }
 
@@ -76,11 +84,7 @@ pub fn uniform_hemisphere_pdf() -> f32 {
 /// lifted to the hemisphere).
 #[inline]
 pub fn sample_cosine_hemisphere(u: Vec2) -> Vec3 {
-    let d = sample_concentric_disk(u);
-    // the disk point's radius is the larger of |2u − 1|'s coordinates: its height does not wait
-    // on the angle's division and polynomial
-    let o = 2.0 * u - Vec2::ONE;
-    let r = o.x.abs().max(o.y.abs());
+    let (d, r) = concentric(u);
     let z = (1.0 - r * r).max(0.0).sqrt();
     Vec3::new(d.x, d.y, z)
 }
