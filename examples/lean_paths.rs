@@ -40,7 +40,7 @@ use std::time::Instant;
 use vrpt::accel::TraceStack;
 use vrpt::bsdf::{Bsdf, Directions};
 use vrpt::camera::Camera;
-use vrpt::integrator::{mis_weight, radiance, IntegratorSettings, RayCounts};
+use vrpt::integrator::{mis_weight, radiance, RayCounts, RR_START_BOUNCE};
 use vrpt::math::Frame;
 use vrpt::render::{render, NoProgress, RenderSettings};
 use vrpt::sampler::layout::{BounceSample, CameraSample, LightValues};
@@ -226,15 +226,7 @@ fn lean_default(
     let eps = scene.ray_epsilon;
     let mut sampler = StratifiedSampler::new(settings.seed, spp);
     let mut stack = TraceStack::default();
-    let integrator = IntegratorSettings {
-        max_depth: depth,
-        directions: s.directions,
-        lights: s.lights,
-        light_points: s.light_points,
-        light_choice: s.light_choice,
-        time_traces: false,
-        camera_emission: true,
-    };
+    let integrator = settings.integrator();
     let mut rays = RayCounts::default();
     let mut film = vec![(DVec3::ZERO, DVec3::ZERO); w as usize * h as usize];
     for (pixel, (sum, sum_sq)) in film.iter_mut().enumerate() {
@@ -287,7 +279,8 @@ fn lean_default(
                 let frame = Frame::from_normal(n);
                 let wo = frame.to_local(-d);
                 let lobe = bsdf.chooses_lobe(Directions::Phong);
-                let u = BounceSample::draw_needed(&mut sampler, values, lobe, segment >= 3, false);
+                let rr = segment >= RR_START_BOUNCE;
+                let u = BounceSample::draw_needed(&mut sampler, values, lobe, rr, false);
                 let spawn = p + n * eps;
                 if let Some(ls) = lights.sample(p, n, u.light, u.light_point) {
                     let wi = frame.to_local(ls.wi);
@@ -315,7 +308,7 @@ fn lean_default(
                     break;
                 }
                 beta *= bs.f * (bs.wi.z / bs.pdf);
-                if segment >= 3 {
+                if rr {
                     let q = beta.max_element().min(0.95);
                     if u.roulette >= q {
                         break;
