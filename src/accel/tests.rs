@@ -35,7 +35,7 @@ pub(super) fn tree_avx2(
     #[allow(unsafe_code)]
     unsafe {
         (
-            accel.closest_avx2(&mut stack.0, o, d, tmax, keep),
+            accel.closest_avx2(&mut stack.1, o, d, tmax, keep),
             accel.any_avx2(&mut stack.0, o, d, tmax, keep),
         )
     }
@@ -240,7 +240,7 @@ fn a_two_faced_wall_shows_each_side_its_own_face() {
                         // SAFETY: the CPU has AVX2
                         #[allow(unsafe_code)]
                         found.push(unsafe {
-                            accel.closest_avx2(&mut stack.0, o, d, f32::INFINITY, |_, _| true)
+                            accel.closest_avx2(&mut stack.1, o, d, f32::INFINITY, |_, _| true)
                         });
                     }
                     for hit in found {
