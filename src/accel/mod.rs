@@ -368,8 +368,9 @@ impl Accel {
         [t.v0.into(), (t.v0 - t.e1).into(), (t.v0 + t.e2).into()]
     }
 
-    /// Closest hit along `origin + t·dir` for `t ∈ (0, tmax)`; `dir` must be unit length. (A
-    /// fresh stack per call; a renderer keeps one: [`Accel::intersect_with`].)
+    /// Closest hit along `origin + t·dir` for `t ∈ (0, tmax)`; `dir` must be unit length. (On
+    /// stacks the calling thread keeps for these calls; a renderer passes its own:
+    /// [`Accel::intersect_with`].)
     #[inline]
     pub fn intersect(&self, origin: Vec3, dir: Vec3, tmax: f32) -> Option<Hit> {
         STACKS.with_borrow_mut(|stack| self.closest(stack, (origin, dir, tmax), |_, _| true))
@@ -411,7 +412,8 @@ impl Accel {
         self.any(stack, origin, dir, tmax, keep)
     }
 
-    /// True if anything lies along `origin + t·dir` for `t ∈ (0, tmax)` (any hit, early out).
+    /// True if anything lies along `origin + t·dir` for `t ∈ (0, tmax)` (any hit, early out; on
+    /// the thread's stacks, as [`Accel::intersect`]).
     #[inline]
     pub fn occluded(&self, origin: Vec3, dir: Vec3, tmax: f32) -> bool {
         STACKS.with_borrow_mut(|stack| self.any(stack, origin, dir, tmax, |_, _| true))
