@@ -489,8 +489,7 @@ impl Accel {
         let mut ray = ray_of(origin, dir, tmax);
         let mut best = None;
         ordered_walk_avx2(&self.bvh.nodes, stack, &mut ray, |base, bits, ray| {
-            group_closest_avx2(self, base, bits, ray, &mut best, &keep);
-            false
+            group_closest_avx2(self, base, bits, ray, &mut best, &keep)
         });
         hit_of(best, ray.tmax)
     }

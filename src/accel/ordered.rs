@@ -23,8 +23,8 @@ pub(super) type OrderStack = Vec<(u32, f32)>;
 
 /// Walks the tree `nodes` along `ray`, nearest child first, calling `leaves(base, bits, ray)`
 /// for the triangles `base + k` (bit `k` of `bits`) of each node's hit leaf children, which may
-/// shorten `ray.tmax`; the walk ends when `leaves` returns true (an any-hit walk's first hit) or
-/// no child is left that the ray enters before `ray.tmax`.
+/// shorten `ray.tmax`; the walk ends when no child is left that the ray enters before
+/// `ray.tmax`.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[inline]
@@ -32,7 +32,7 @@ pub(super) fn ordered_walk_avx2(
     nodes: &[CwBvhNode],
     stack: &mut OrderStack,
     ray: &mut Ray,
-    mut leaves: impl FnMut(u32, u32, &mut Ray) -> bool,
+    mut leaves: impl FnMut(u32, u32, &mut Ray),
 ) {
     use std::arch::x86_64::*;
     stack.clear();
@@ -49,9 +49,7 @@ pub(super) fn ordered_walk_avx2(
             // a leaf's triangles as the traversal's hit mask places them (its low 24 bits; the
             // octant does not move a leaf's bits)
             let bits = hit_bits_avx2(node, _mm256_castps_si256(hits), 0) & 0x00ff_ffff;
-            if leaves(node.primitive_base_idx, bits, ray) {
-                return;
-            }
+            leaves(node.primitive_base_idx, bits, ray);
         }
         let mut hit_inner = mask & inner;
         if hit_inner != 0 {
@@ -61,13 +59,11 @@ pub(super) fn ordered_walk_avx2(
             unsafe {
                 _mm256_storeu_ps(t.as_mut_ptr(), t_enter)
             };
-            // inner children are stored in slot order from `child_base_idx`
-            let child = |slot: u32| node.child_base_idx + (inner & ((1 << slot) - 1)).count_ones();
             if hit_inner & (hit_inner - 1) == 0 {
                 // one child: on to it, unless a leaf's hit lies before it
                 let slot = hit_inner.trailing_zeros();
                 if t[slot as usize] <= ray.tmax {
-                    at = child(slot);
+                    at = node.child_node_index(slot as usize);
                     continue;
                 }
             } else {
@@ -75,7 +71,7 @@ pub(super) fn ordered_walk_avx2(
                 while hit_inner != 0 {
                     let slot = hit_inner.trailing_zeros();
                     hit_inner &= hit_inner - 1;
-                    stack.push((child(slot), t[slot as usize]));
+                    stack.push((node.child_node_index(slot as usize), t[slot as usize]));
                 }
                 nearest_last(&mut stack[first..]);
             }
