@@ -158,10 +158,18 @@ impl RenderStats {
         );
         if self.rays.timed > 0 {
             let trace = self.rays.trace_seconds();
+            // (no rate where the timed rays took no measurable time: not "inf")
+            let rate = if trace > 0.0 {
+                format!(
+                    " ({:.2} Mrays/s per thread while tracing)",
+                    self.rays.total() as f64 / trace / 1e6
+                )
+            } else {
+                String::new()
+            };
             s += &format!(
-                ": trace {:.1}% ({:.2} Mrays/s per thread while tracing), shade and sample {:.1}%",
+                ": trace {:.1}%{rate}, shade and sample {:.1}%",
                 100.0 * trace / thread,
-                self.rays.total() as f64 / trace / 1e6,
                 100.0 * (1.0 - trace / thread)
             );
         }
