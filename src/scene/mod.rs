@@ -51,14 +51,13 @@ pub struct Mesh {
     pub triangles: Vec<MeshTriangle>,
 }
 
-/// Shading data of one triangle, stored in BVH order beside the accelerator's triangles.
+/// Shading data of one triangle, stored in BVH order beside the accelerator's triangles (56
+/// bytes; the texture coordinates, which only maps read, are kept apart: [`Scene::uvs`]).
 #[derive(Clone, Copy, Debug)]
 pub struct TriShading {
     pub normals: [Vec3; 3],
     /// Unit geometric normal by winding.
     pub ng: Vec3,
-    /// Texture coordinates of the vertices (zero where the file has none).
-    pub uvs: [Vec2; 3],
     pub material: u32,
     /// Whether the three vertex normals are `ng`, bit for bit (the file gives none, or gives
     /// the geometric one): the shading normal is then `ng` itself, not interpolated and
@@ -86,6 +85,11 @@ pub struct Scene {
     pub source: PathBuf,
     pub accel: Accel,
     pub shading: Vec<TriShading>,
+    /// The texture coordinates of each triangle's vertices in BVH order (zero where the file has
+    /// none), where a material reads them (a colour, exponent, bump, normal or opacity map);
+    /// else empty, and a hit reads zeros: 24 bytes a triangle an untextured scene does not
+    /// keep, nor a ray's shading load from memory ([`Scene::triangle_uvs`]).
+    pub uvs: Vec<[Vec2; 3]>,
     pub materials: Vec<Material>,
     /// The emissive triangles, and which primitive is which light.
     pub lights: Lights,
@@ -142,6 +146,14 @@ impl Scene {
         let accel = Accel::build_from(mesh.triangles.iter().map(|t| t.p));
         let (lo, hi) = bounds(mesh.triangles.iter().map(|t| &t.p));
         let shading = shading_in_bvh_order(&accel, &mesh);
+        let cutouts = materials.iter().any(|m| m.maps.opacity.is_some());
+        let perturbed = materials.iter().any(|m| m.maps.perturbs_normal());
+        let coloured = materials.iter().any(|m| m.maps.colour());
+        let uvs = if cutouts || perturbed || coloured {
+            uvs_in_bvh_order(&accel, &mesh)
+        } else {
+            Vec::new()
+        };
         let extent = lo
             .abs()
             .max(hi.abs())
@@ -181,15 +193,16 @@ impl Scene {
             source,
             accel,
             shading,
+            uvs,
             lights,
             camera,
             defaults: options.defaults,
             ray_epsilon,
             warnings,
             hash,
-            cutouts: materials.iter().any(|m| m.maps.opacity.is_some()),
-            perturbed: materials.iter().any(|m| m.maps.perturbs_normal()),
-            coloured: materials.iter().any(|m| m.maps.colour()),
+            cutouts,
+            perturbed,
+            coloured,
             materials,
             textures: options.textures,
             files: Vec::new(),
@@ -206,12 +219,23 @@ impl Scene {
     }
 
     /// Bytes the geometry holds: the BVH with its triangles and index maps, and the shading
-    /// data (normals, texture coordinates, materials), in that order.
+    /// data (normals, materials, texture coordinates where kept), in that order.
     pub fn memory_bytes(&self) -> (usize, usize) {
         (
             self.accel.memory_bytes(),
-            std::mem::size_of_val(self.shading.as_slice()),
+            std::mem::size_of_val(self.shading.as_slice())
+                + std::mem::size_of_val(self.uvs.as_slice()),
         )
+    }
+
+    /// The texture coordinates of BVH-order triangle `prim`'s vertices (zeros where the scene
+    /// keeps none: no material reads them).
+    #[inline(always)]
+    pub fn triangle_uvs(&self, prim: u32) -> [Vec2; 3] {
+        self.uvs
+            .get(prim as usize)
+            .copied()
+            .unwrap_or([Vec2::ZERO; 3])
     }
 
     /// Number of triangles.
@@ -241,7 +265,8 @@ impl Scene {
         }
         // only textures and normal maps read the coordinates
         let uv = if self.coloured || self.perturbed {
-            sh.uvs[0] * b0 + sh.uvs[1] * hit.b1 + sh.uvs[2] * hit.b2
+            let uvs = self.triangle_uvs(hit.prim);
+            uvs[0] * b0 + uvs[1] * hit.b1 + uvs[2] * hit.b2
         } else {
             Vec2::ZERO
         };
@@ -278,7 +303,8 @@ impl Scene {
         }
         let [a, b, c] = self.accel.vertices(prim);
         let (e1, e2) = (b - a, c - a);
-        let (d1, d2) = (sh.uvs[1] - sh.uvs[0], sh.uvs[2] - sh.uvs[0]);
+        let uvs = self.triangle_uvs(prim);
+        let (d1, d2) = (uvs[1] - uvs[0], uvs[2] - uvs[0]);
         let det = d1.x * d2.y - d1.y * d2.x;
         if det.abs() < 1e-20 {
             return ns;
@@ -378,7 +404,8 @@ impl Scene {
         if m.maps.opacity.is_none() {
             return true;
         }
-        let uv = sh.uvs[0] * (1.0 - b.x - b.y) + sh.uvs[1] * b.x + sh.uvs[2] * b.y;
+        let uvs = self.triangle_uvs(prim);
+        let uv = uvs[0] * (1.0 - b.x - b.y) + uvs[1] * b.x + uvs[2] * b.y;
         m.opaque_at(uv, &self.textures)
     }
 
@@ -453,7 +480,6 @@ fn shading_in_bvh_order(accel: &Accel, mesh: &Mesh) -> Vec<TriShading> {
             TriShading {
                 normals,
                 ng,
-                uvs: t.uvs.unwrap_or([Vec2::ZERO; 3]),
                 material: t.material,
                 // bit for bit: a file's normal of −0 where ng has +0 would turn the
                 // shading frame (`Frame::from_normal` takes the sign of z)
@@ -462,6 +488,17 @@ fn shading_in_bvh_order(accel: &Accel, mesh: &Mesh) -> Vec<TriShading> {
                     .all(|n| n.to_array().map(f32::to_bits) == ng.to_array().map(f32::to_bits)),
             }
         })
+        .collect()
+}
+
+/// The texture coordinates of the mesh's triangles in the BVH's order (zero where the file has
+/// none).
+fn uvs_in_bvh_order(accel: &Accel, mesh: &Mesh) -> Vec<[Vec2; 3]> {
+    use rayon::prelude::*;
+    accel
+        .order
+        .par_iter()
+        .map(|&i| mesh.triangles[i as usize].uvs.unwrap_or([Vec2::ZERO; 3]))
         .collect()
 }
 
