@@ -263,6 +263,23 @@ fn the_shipped_textured_scene_renders() {
     assert!((hit.t - 2.0).abs() < 1e-3, "the bar: t = {}", hit.t);
 }
 
+/// A scene keeps its triangles' texture coordinates only where a material reads them: the
+/// textured scene keeps one triple a triangle (the fence's cutout reads them: the test above),
+/// the Cornell box, whose materials have no map, keeps none, and its shading data is the
+/// 56-byte record a triangle and nothing more.
+#[test]
+fn texture_coordinates_are_kept_only_where_a_map_reads_them() {
+    let textured = common::shipped("textured");
+    assert_eq!(textured.uvs.len(), textured.triangle_count());
+    assert!(textured
+        .uvs
+        .iter()
+        .any(|t| t.iter().any(|uv| *uv != Vec2::ZERO)));
+    let cornell = common::shipped("cornell-box");
+    assert!(cornell.uvs.is_empty());
+    assert_eq!(cornell.memory_bytes().1, 56 * cornell.triangle_count());
+}
+
 /// Rays along the axes, with −0.0 or +0.0 in their zero components, find what testing every
 /// triangle finds, in the textured scene (whose quads lie in axis planes: flat boxes). obvhs
 /// inverted −0.0 as −1/ε but ordered slabs by `x < 0.0`: before `accel::positive_zeros`, the
