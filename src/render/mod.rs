@@ -323,8 +323,8 @@ pub fn pass_bounds(done: u64, pass: u64, spp: u64) -> Range<u64> {
 /// Each pixel renders the samples of a pass in one go, so per-pixel work of the sampler (the
 /// stratified sampler's tables) is done once per pixel and pass. A render that can be stopped
 /// reads the stop flag before every pixel (and every 256 samples of one); a stop drops the pass
-/// under way and renders every pixel's first samples of it instead (at least one, about
-/// [`BATCH_SECONDS`] at the speed of the pixels that finished), so every pixel holds the same
+/// under way and renders every pixel's first samples of it instead (one, timed, then as many
+/// more as fill about [`BATCH_SECONDS`] at that speed), so every pixel holds the same
 /// samples and a stop waits about a quarter of a second. A partial pass is an unbiased estimate
 /// (every sample of a stratified or Sobol set is uniform on its own), and the image does not
 /// depend on how a pass was cut: a pixel's sums go on in sample order.
